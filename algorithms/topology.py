@@ -1,0 +1,250 @@
+"""Combinatorial topology of a triangle mesh: edges, islands, boundary loops, Euler, genus.
+
+Functions on the face array (F, 3); all vectorised except the walk along a boundary loop, which
+is sequential by nature. Half-edges of face (a, b, c) are a->b, b->c, c->a.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+from scipy.sparse.csgraph import connected_components
+
+
+def halfedges(faces: NDArray[np.int64]) -> NDArray[np.int64]:
+    """(3F, 2) directed half-edges; row 3f+k is edge k of face f."""
+    f = np.asarray(faces, dtype=np.int64)
+    return np.stack([f, np.roll(f, -1, axis=1)], axis=2).reshape(-1, 2)
+
+
+@dataclass(frozen=True, eq=False)
+class EdgeTable:
+    """Undirected edges of a face array.
+
+    edges: (E, 2) sorted vertex pairs; halfedge_edge: (3F,) the edge of each half-edge;
+    counts: (E,) faces per edge.
+    """
+
+    edges: NDArray[np.int64]
+    halfedge_edge: NDArray[np.int64]
+    counts: NDArray[np.int64]
+
+
+def edge_table(faces: NDArray[np.int64]) -> EdgeTable:
+    he = halfedges(faces)
+    if not len(he):
+        z = np.zeros((0, 2), dtype=np.int64)
+        return EdgeTable(z, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
+    und = np.sort(he, axis=1)
+    edges, inv, counts = np.unique(und, axis=0, return_inverse=True, return_counts=True)
+    return EdgeTable(edges, inv.ravel(), counts)
+
+
+def face_adjacency(faces: NDArray[np.int64], *, manifold_only: bool = True) -> NDArray[np.int64]:
+    """(K, 2) pairs of faces that share an edge (only edges with exactly two faces if manifold_only)."""
+    et = edge_table(faces)
+    order = np.argsort(et.halfedge_edge, kind="stable")
+    e_sorted = et.halfedge_edge[order]
+    face_of = order // 3
+    # consecutive half-edges of the same edge
+    same = e_sorted[1:] == e_sorted[:-1]
+    pairs = np.stack([face_of[:-1][same], face_of[1:][same]], axis=1)
+    if manifold_only:
+        pairs = pairs[et.counts[e_sorted[:-1][same]] == 2]
+    return pairs
+
+
+def islands(faces: NDArray[np.int64]) -> tuple[int, NDArray[np.int64]]:
+    """Connected components of faces through shared edges: (count, (F,) label).
+
+    Labels are ordered by decreasing size (island 0 is the largest), ties by first face.
+    """
+    nf = len(faces)
+    if nf == 0:
+        return 0, np.zeros(0, dtype=np.int64)
+    pairs = face_adjacency(faces, manifold_only=False)
+    g = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(nf, nf))
+    n, lab = connected_components(g, directed=False)
+    sizes = np.bincount(lab, minlength=n)
+    first = np.full(n, nf)
+    np.minimum.at(first, lab, np.arange(nf))
+    order = np.lexsort((first, -sizes))
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n)
+    return int(n), rank[lab]
+
+
+def boundary_halfedges(faces: NDArray[np.int64]) -> NDArray[np.int64]:
+    """(B, 2) half-edges whose edge has exactly one face, directed as in the face's winding.
+
+    With faces wound counter-clockwise seen from outside, this is the positive direction of
+    spec/repair.md §2.
+    """
+    et = edge_table(faces)
+    he = halfedges(faces)
+    return he[et.counts[et.halfedge_edge] == 1]
+
+
+def boundary_loops(faces: NDArray[np.int64]) -> list[NDArray[np.int64]]:
+    """Boundary loops as vertex index arrays, each walked in its positive direction.
+
+    A loop lists each vertex once; the edge from the last vertex back to the first closes it.
+    Where several boundary half-edges leave one vertex (two loops touching at a vertex), the
+    walk turns around the vertex through the faces to stay on its own loop. Loops are sorted
+    by decreasing length, ties by smallest vertex.
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    bhe = boundary_halfedges(faces)
+    if not len(bhe):
+        return []
+    # half-edge lookup by key a*V+b for the fan walk
+    nv = int(faces.max()) + 1
+    he = halfedges(faces)
+    keys = he[:, 0] * nv + he[:, 1]
+    korder = np.argsort(keys)
+    ksorted = keys[korder]
+
+    def face_of(a: int, b: int) -> int:
+        k = a * nv + b
+        i = np.searchsorted(ksorted, k)
+        if i < len(ksorted) and ksorted[i] == k:
+            return int(korder[i] // 3)
+        return -1
+
+    out_edges: dict[int, list[int]] = {}
+    for a, b in bhe.tolist():
+        out_edges.setdefault(a, []).append(b)
+    bset = {(a, b) for a, b in bhe.tolist()}
+
+    def next_from(prev: int, v: int) -> int:
+        outs = out_edges[v]
+        if len(outs) == 1:
+            return outs[0]
+        # fan walk: start in the face of (prev, v), rotate around v until a boundary edge leaves v
+        f = face_of(prev, v)
+        for _ in range(len(faces)):
+            tri = faces[f].tolist()
+            k = tri.index(v)
+            w = tri[(k + 1) % 3]
+            if (v, w) in bset:
+                return w
+            f = face_of(w, v)
+            if f < 0:
+                break
+        return outs[0]
+
+    used: set[tuple[int, int]] = set()
+    loops: list[NDArray[np.int64]] = []
+    for a, b in bhe.tolist():
+        if (a, b) in used:
+            continue
+        loop = [a]
+        used.add((a, b))
+        prev, cur = a, b
+        while cur != a:
+            loop.append(cur)
+            nxt = next_from(prev, cur)
+            if (cur, nxt) in used:
+                break
+            used.add((cur, nxt))
+            prev, cur = cur, nxt
+        loops.append(np.array(loop, dtype=np.int64))
+    loops.sort(key=lambda lp: (-len(lp), int(lp.min())))
+    return loops
+
+
+def euler_characteristic(faces: NDArray[np.int64]) -> int:
+    """chi = V - E + F over the vertices the faces use."""
+    faces = np.asarray(faces, dtype=np.int64)
+    if not len(faces):
+        return 0
+    nv = len(np.unique(faces))
+    ne = len(edge_table(faces).edges)
+    return int(nv - ne + len(faces))
+
+
+def genus(chi: int, n_boundaries: int, n_components: int = 1) -> float:
+    """Genus of an orientable surface: chi = 2c - 2g - b  =>  g = (2c - chi - b) / 2."""
+    return (2 * n_components - chi - n_boundaries) / 2
+
+
+def is_closed_manifold(faces: NDArray[np.int64]) -> bool:
+    """Every edge has exactly two faces, and they traverse it in opposite directions."""
+    faces = np.asarray(faces, dtype=np.int64)
+    if not len(faces):
+        return False
+    et = edge_table(faces)
+    if not np.all(et.counts == 2):
+        return False
+    return orientation_consistent(faces)
+
+
+def orientation_consistent(faces: NDArray[np.int64]) -> bool:
+    """No directed half-edge occurs twice (neighbouring faces wind the same way)."""
+    he = halfedges(faces)
+    if not len(he):
+        return True
+    return len(np.unique(he, axis=0)) == len(he)
+
+
+def nonmanifold_vertices(faces: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Vertices whose incident faces form more than one fan (connected through edges at the vertex)."""
+    return np.array([v for v, fans in vertex_fans(faces).items() if len(fans) > 1], dtype=np.int64)
+
+
+def vertex_fans(faces: NDArray[np.int64]) -> dict[int, list[list[int]]]:
+    """For every vertex with more than one fan: its fans, as lists of incident face indices.
+
+    Two faces at v are in one fan when they share an edge that has v as an endpoint.
+    Vertices with a single fan are not listed (the common case, kept cheap).
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    nf = len(faces)
+    if not nf:
+        return {}
+    nv = int(faces.max()) + 1
+    # count, per vertex, faces minus (edge-adjacent face pairs around it): a single fan of k faces
+    # has k-1 links (open) or k links (closed); more fans have fewer links.
+    pairs = face_adjacency(faces, manifold_only=False)
+    inc = np.bincount(faces.ravel(), minlength=nv)
+    # vertices shared by each adjacent pair: the two endpoints of their common edge
+    a, b = faces[pairs[:, 0]], faces[pairs[:, 1]]
+    shared = (a[:, :, None] == b[:, None, :]).any(axis=2)
+    links = np.zeros(nv, dtype=np.int64)
+    np.add.at(links, a[shared], 1)
+    suspect = np.flatnonzero((inc > 0) & (links < inc - 1))
+    out: dict[int, list[list[int]]] = {}
+    if not len(suspect):
+        return out
+    vf: dict[int, list[int]] = {int(v): [] for v in suspect}
+    for f, tri in enumerate(faces.tolist()):
+        for v in tri:
+            if v in vf:
+                vf[v].append(f)
+    for v, fl in vf.items():
+        # union-find over faces at v by shared edges through v
+        parent = {f: f for f in fl}
+
+        def find(x: int) -> int:
+            while parent[x] != x:
+                parent[x] = parent[parent[x]]
+                x = parent[x]
+            return x
+
+        by_other: dict[int, list[int]] = {}
+        for f in fl:
+            for w in faces[f].tolist():
+                if w != v:
+                    by_other.setdefault(w, []).append(f)
+        for group in by_other.values():
+            for g in group[1:]:
+                parent[find(g)] = find(group[0])
+        fans: dict[int, list[int]] = {}
+        for f in fl:
+            fans.setdefault(find(f), []).append(f)
+        if len(fans) > 1:
+            out[v] = list(fans.values())
+    return out

@@ -1,0 +1,59 @@
+import numpy as np
+import pytest
+
+from algorithms.cases import cap, icosphere, torus
+from algorithms.metrics import (
+    angle_histogram,
+    angle_stats,
+    distances,
+    edge_length_cv,
+    min_angles,
+    normal_deviation,
+    surface_area,
+    topology,
+    triangle_angles,
+)
+
+
+def test_equilateral_angles():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0.5, np.sqrt(3) / 2, 0]])
+    np.testing.assert_allclose(triangle_angles(v, [[0, 1, 2]]), [[60, 60, 60]])
+
+
+def test_right_isoceles_angles_and_stats():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    np.testing.assert_allclose(triangle_angles(v, [[0, 1, 2]]), [[90, 45, 45]])
+    s = angle_stats(np.array([10.0, 25.0, 45.0, 60.0]))
+    assert s.min == 10 and s.below_20 == 0.25 and s.below_30 == 0.5 and s.median == 35
+    edges, counts = angle_histogram(np.array([1.0, 59.0, 60.0]), bin_width=10)
+    assert len(edges) == 7 and counts.tolist() == [1, 0, 0, 0, 0, 2]
+
+
+def test_sphere_area_converges():
+    s = icosphere(5)
+    assert surface_area(s.vertices, s.faces) == pytest.approx(4 * np.pi, rel=2e-3)
+
+
+def test_topology_summaries():
+    t = topology(torus().faces)
+    assert t.watertight and t.components == 1 and t.euler == 0 and t.genus == 1
+    s = icosphere(2)
+    o = topology(s.faces[~cap(s, [0, 0, 1], 30)])
+    assert not o.watertight and o.boundary_loops == 1 and o.components == 1 and o.genus == 0 and o.euler == 1
+
+
+def test_distance_to_unit_offset_surface():
+    # a sphere of radius 2 against one of radius 1: every point is ~1 away
+    a, b = icosphere(4, radius=1.0), icosphere(4, radius=2.0)
+    d = distances(b.vertices, b.faces, a.vertices, a.faces, samples=3000)
+    diag = np.linalg.norm(a.vertices.max(0) - a.vertices.min(0))
+    assert d.hausdorff * diag == pytest.approx(1.0, abs=0.01)
+    assert d.mean * diag == pytest.approx(1.0, abs=0.01)
+
+
+def test_normal_deviation_and_uniformity():
+    n = np.array([[0, 0, 1.0], [1, 0, 0]])
+    np.testing.assert_allclose(normal_deviation(n, [[0, 0, 1], [0, 1, 0]]), [0, 90], atol=1e-9)
+    s = icosphere(3)
+    assert edge_length_cv(s.vertices, s.faces) < 0.15
+    assert min_angles(s.vertices, s.faces).min() > 45

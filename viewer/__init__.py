@@ -1,0 +1,1 @@
+"""The Bridgefield explorer (PySide6 + pyvistaqt). Importing this package imports no Qt."""
