@@ -82,3 +82,7 @@ class ForceLine:
         mid = 0.5 * (self.tensions[1:] + self.tensions[:-1])  # trapezoid rule
         total = dl.sum()
         return float((mid * dl).sum() / total) if total > 0 else float(self.tensions.mean())
+
+
+class Cancelled(Exception):
+    """Raised by a long computation when its cancel check returns True."""

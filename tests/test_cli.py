@@ -4,11 +4,11 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import data_file
 
 from algorithms.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
 
 
 def test_demos_lists_the_repair_demos(capsys):
@@ -30,9 +30,8 @@ def test_info_two_caps_counts_free_points(capsys):
     assert d["class"] == "ICM3" and d["free_points"]["unreferenced"] == 40
 
 
-@pytest.mark.skipif(not (DATA / "bunny.ply").exists(), reason="shared data not present")
 def test_info_bunny(capsys):
-    assert main(["info", str(DATA / "bunny.ply"), "--json"]) == 0
+    assert main(["info", str(data_file("bunny.ply")), "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     main_island = d["islands"][0]
     assert len(main_island["loops"]) == 5

@@ -1,7 +1,7 @@
-from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import data_file
 
 from algorithms.boundary import summarize
 from algorithms.cases import disk
@@ -9,8 +9,6 @@ from algorithms.io import load_model
 from algorithms.mesh import MeshError
 from algorithms.normalize import normalize
 from algorithms.topology import edge_table, orientation_consistent
-
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 
 def square():
@@ -100,9 +98,8 @@ def test_nan_is_rejected():
         normalize(v, f)
 
 
-@pytest.mark.skipif(not (DATA / "bunny.ply").exists(), reason="shared data not present")
 def test_real_bunny():
-    m = load_model(DATA / "bunny.ply")
+    m = load_model(data_file("bunny.ply"))
     s = summarize(m)
     assert len(s.islands) == 1
     assert len(s.loops) == 5
