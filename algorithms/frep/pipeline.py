@@ -1,0 +1,202 @@
+"""The whole F-rep triangulation (spec/frep.md §2-§5), recording every stage for replay.
+
+sampling (quadtree + rays) -> linking (quads ABCD -> ABC, ACD) -> holes (loops of one-face
+edges) -> filling (Liepa's minimum-weight triangulation) -> merging the patches with the
+neighbouring faces of zero projected area (the sides parallel to the rays) -> refinement
+(centroid splits + edge flips) -> fairing (U2 = 0) -> metrics.
+
+Filling, refinement and fairing are the shared darning code (:mod:`algorithms.darning`), the
+same implementation the repair pipeline uses.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from ..mesh import Mesh
+from ..topology import boundary_loops, face_adjacency
+from .linking import DIAGONALS, Linked, link
+from .metrics import FrepMetrics, measure, project
+from .objects import FRepObject
+from .sampling import Samples, SamplingParams, sample
+
+WEIGHTS = ("area", "length")
+FAIRINGS = ("U2", "U1", "none")
+
+
+@dataclass(frozen=True)
+class FrepParams:
+    qlev: int = 6  # quadtree depth, S_xy = 1 / 2^qlev of the domain
+    blev: int = 12  # ray subdivision depth, S_z = 1 / 2^blev
+    diagonal: str = "AC"  # quads split as ABC, ACD (the paper) or along the shorter diagonal
+    weight: str = "area"  # Liepa weight: "area" or "length" (minimum total edge length)
+    merge_sides: bool = True  # merge patches with neighbouring zero-projected-area faces before refining
+    side_slope: float = 1e-6  # |n_z| below this (unit normal) counts as zero projected area
+    refine: bool = True  # centroid splitting + edge flips
+    density: float = float(np.sqrt(2.0))  # alpha of the split test (1 = the spec literally, sqrt 2 = Liepa)
+    fairing: str = "U2"  # U2 = 0 (bi-Laplacian), U1 = 0 (umbrella) or "none"
+    project: bool = False  # (choice) finally move the new vertices onto F = 0 along the gradient
+
+    def __post_init__(self) -> None:
+        SamplingParams(self.qlev, self.blev)  # validates qlev and blev
+        if self.diagonal not in DIAGONALS:
+            raise ValueError(f"diagonal must be one of {DIAGONALS}, got {self.diagonal!r}")
+        if self.weight not in WEIGHTS:
+            raise ValueError(f"weight must be one of {WEIGHTS}, got {self.weight!r}")
+        if self.fairing not in FAIRINGS:
+            raise ValueError(f"fairing must be one of {FAIRINGS}, got {self.fairing!r}")
+        if not 0 <= self.side_slope < 1:
+            raise ValueError(f"side_slope must be in [0, 1), got {self.side_slope}")
+        if not self.density > 0:
+            raise ValueError(f"density must be > 0, got {self.density}")
+
+
+@dataclass(frozen=True, eq=False)
+class FrepResult:
+    """Every stage of one run.
+
+    samples: the surface points (and quadtree blocks, runs); linked: quads and successors;
+    quad_mesh: the mesh after linking (with holes); loops: the hole loops (vertex ids of
+    quad_mesh, positive direction); filled: after Liepa filling, filled_patch: (F,) bool, the
+    patch faces; region: (F,) bool, the faces handed to refinement (patches + merged side
+    faces); refined: after refinement; faired: after fairing (and projection): the result;
+    metrics of the result; timings in seconds per stage.
+    """
+
+    obj: FRepObject
+    params: FrepParams
+    samples: Samples
+    linked: Linked
+    quad_mesh: Mesh
+    loops: list[NDArray[np.int64]]
+    filled: Mesh
+    filled_patch: NDArray[np.bool_]
+    region: NDArray[np.bool_]
+    refined: Mesh
+    refined_new: NDArray[np.bool_]  # (V,) vertices made by refinement
+    faired: Mesh
+    metrics: FrepMetrics
+    timings: dict[str, float] = field(default_factory=dict)
+    splits: int = 0
+    flips: int = 0
+
+    @property
+    def mesh(self) -> Mesh:
+        return self.faired
+
+    def stages(self) -> list[tuple[str, Mesh | NDArray[np.float64]]]:
+        """The stages in order, for the explorer's timeline."""
+        return [("points", self.samples.points), ("quads", self.quad_mesh), ("filled", self.filled),
+                ("refined", self.refined), ("faired", self.faired)]
+
+    def report(self) -> dict:
+        p = self.params
+        return {
+            "object": self.obj.name,
+            "params": {k: getattr(p, k) for k in p.__dataclass_fields__},
+            "points": int(len(self.samples.points)),
+            "columns": int(len(self.samples.columns)),
+            "interval_evaluations": self.samples.interval_evaluations,
+            "point_evaluations": self.samples.point_evaluations,
+            "quads": int(len(self.linked.quads)),
+            "quads_dropped": self.linked.dropped,
+            "holes": len(self.loops),
+            "hole_sizes": sorted((int(len(lp)) for lp in self.loops), reverse=True),
+            "region_faces": int(self.region.sum()),
+            "splits": self.splits,
+            "flips": self.flips,
+            "metrics": self.metrics.as_dict(),
+            "timings": dict(self.timings),
+        }
+
+
+def _compact(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Mesh:
+    """Drop the vertices no face uses (points the linking left out)."""
+    used = np.unique(faces)
+    remap = np.full(len(vertices), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return Mesh(vertices[used], remap[faces])
+
+
+def _side_faces(vertices: NDArray[np.float64], faces: NDArray[np.int64], slope: float) -> NDArray[np.bool_]:
+    """Faces whose projection on the camera plane (xy) has zero area (|n_z| <= slope)."""
+    t = vertices[faces]
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    ln = np.linalg.norm(n, axis=1)
+    return np.abs(n[:, 2]) <= slope * np.maximum(ln, 1e-300)
+
+
+def _merge_region(faces: NDArray[np.int64], patch: NDArray[np.bool_], side: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """The patches plus the side faces connected to them through side faces (spec §4)."""
+    cand = patch | side
+    idx = np.flatnonzero(cand)
+    if not len(idx):
+        return cand
+    sub = faces[idx]
+    pairs = face_adjacency(sub, manifold_only=False)
+    g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(idx), len(idx)))
+    _, lab = connected_components(g, directed=False)
+    has_patch = np.zeros(lab.max() + 1, dtype=bool)
+    has_patch[lab[patch[idx]]] = True
+    out = np.zeros(len(faces), dtype=bool)
+    out[idx[has_patch[lab]]] = True
+    return out
+
+
+def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: object) -> FrepResult:
+    from ..darning import darn, fair, refine  # the shared darning implementation
+
+    params = params or FrepParams(**kw)  # type: ignore[arg-type]
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    s = sample(obj, SamplingParams(params.qlev, params.blev))
+    timings["sampling"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    linked = link(s, obj, diagonal=params.diagonal)
+    quad_mesh = _compact(s.points, linked.faces)
+    timings["linking"] = time.perf_counter() - t0
+    # ---- holes: loops of one-face edges, filled by Liepa's minimum-weight triangulation
+    t0 = time.perf_counter()
+    V, F = np.asarray(quad_mesh.vertices), np.asarray(quad_mesh.faces)
+    loops = boundary_loops(F)
+    patches = [darn(V, F, lp, method="liepa", weight=params.weight).faces for lp in loops]
+    pf = np.vstack([F, *patches]) if patches else F
+    filled = Mesh(V, pf)
+    filled_patch = np.r_[np.zeros(len(F), bool), np.ones(len(pf) - len(F), bool)]
+    timings["filling"] = time.perf_counter() - t0
+    # ---- merging with the zero-projected-area side faces, refinement
+    t0 = time.perf_counter()
+    region = _merge_region(pf, filled_patch, _side_faces(V, pf, params.side_slope)) if params.merge_sides \
+        else filled_patch.copy()
+    splits = flips = 0
+    if params.refine and region.any():
+        r = refine(V, pf[~region], pf[region], density=params.density)
+        RV, RF = r.vertices, np.vstack([pf[~region], r.faces])
+        splits, flips = r.splits, r.flips
+    else:
+        RV, RF = V, pf
+    refined = Mesh(RV, RF)
+    new = np.r_[np.zeros(len(V), bool), np.ones(len(RV) - len(V), bool)]
+    timings["refinement"] = time.perf_counter() - t0
+    # ---- fairing: U2 = 0 for the new vertices, the rest fixed
+    t0 = time.perf_counter()
+    FV = RV
+    if params.fairing != "none" and new.any():
+        FV = fair(RV, RF, np.flatnonzero(new), operator=params.fairing)
+    if params.project and new.any():
+        FV = FV.copy()
+        FV[new] = project(obj, FV[new])
+    faired = Mesh(FV, RF)
+    timings["fairing"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    metrics = measure(obj, faired, voxel=float(obj.size[:2].max()) / 2**params.qlev)
+    timings["metrics"] = time.perf_counter() - t0
+    timings["total"] = sum(v for k, v in timings.items() if k != "metrics")
+    return FrepResult(obj, params, s, linked, quad_mesh, loops, filled, filled_patch, region, refined, new,
+                      faired, metrics, timings, splits, flips)
