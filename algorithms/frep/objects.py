@@ -191,7 +191,7 @@ def torus(major: float = 0.6, minor: float = 0.25) -> FRepObject:
 
 
 def blobs(centers: Any = ((-0.35, 0.0, 0.0), (0.35, 0.05, 0.0), (0.0, 0.3, 0.2)),
-          strength: float = 12.0, threshold: float = 0.35) -> FRepObject:
+          strength: float = 6.0, threshold: float = 0.45) -> FRepObject:
     terms = " + ".join(f"exp(-{strength}*((x-{c[0]})**2 + (y-{c[1]})**2 + (z-{c[2]})**2))" for c in centers)
     return from_expression(f"{terms} - {threshold}", name="blob", closed=True, genus=0)
 
@@ -206,3 +206,10 @@ def perturbed(base: tuple[float, float, float] = (0.75, 0.6, 0.5),
     terms = [f"{f} * pos3(1 - ((x-{cc[0]})/{r[0]})**2 - ((y-{cc[1]})/{r[1]})**2 - ((z-{cc[2]})/{r[2]})**2)"
              for f, cc, r in bumps]
     return from_expression(" + ".join([q0, *terms]), name="perturbed", closed=True, genus=0)
+
+
+def demo_object(name: str) -> FRepObject:
+    """A bundled object by demo name (assets/frep/index.json)."""
+    from ..demos import demo
+
+    return load_spec(demo(name, "frep").path)
