@@ -1,0 +1,122 @@
+"""Sampling, linking, holes and the whole F-rep pipeline on analytic objects."""
+
+import numpy as np
+import pytest
+
+from algorithms.frep.linking import link, section_successors
+from algorithms.frep.objects import blobs, demo_object, perturbed, sphere, torus
+from algorithms.frep.pipeline import FrepParams, triangulate_object
+from algorithms.frep.sampling import BOTTOM, TOP, sample
+from algorithms.metrics import topology
+from algorithms.topology import boundary_loops
+
+
+def test_sampling_finds_all_crossings_of_a_sphere():
+    obj = sphere(0.8)
+    s = sample(obj, qlev=5, blev=14)
+    # every column through the disk x^2 + y^2 < r^2 has exactly two crossings at +-sqrt(r^2 - rho^2)
+    x, y, z = s.points.T
+    rho2 = x**2 + y**2
+    assert np.allclose(np.abs(z), np.sqrt(0.64 - rho2), atol=2 / 2**14)
+    n = 2**5
+    c = -1 + 2 * (np.arange(n) + 0.5) / n
+    X, Y = np.meshgrid(c, c, indexing="ij")
+    assert len(s.points) == 2 * int((X**2 + Y**2 < 0.64).sum())
+    assert np.all(s.point_kind[z < 0] == BOTTOM) and np.all(s.point_kind[z > 0] == TOP)
+
+
+def test_all_intersections_of_a_ray_are_kept():
+    # a torus seen along its axis: columns through the tube's hole ring have 2 crossings,
+    # a vertical torus (axis x) has columns with 4 crossings
+    obj = demo_object("torus")
+    from algorithms.frep.objects import from_expression
+
+    vt = from_expression("0.25**2 - (sqrt(y**2 + z**2) - 0.6)**2 - x**2", name="vtorus")
+    s = sample(vt, qlev=5, blev=12)
+    counts = np.bincount(np.ravel_multi_index(s.point_col.T, (32, 32)))
+    assert counts.max() == 4
+    assert np.abs(vt.value(s.points)).max() < 1e-5
+    assert len(sample(obj, qlev=5, blev=12).points) > 0
+
+
+@pytest.mark.parametrize("obj", [sphere(), torus(), perturbed()], ids=["sphere", "torus", "perturbed"])
+def test_section_successors_are_permutations(obj):
+    s = sample(obj, qlev=5, blev=10)
+    for axis in (0, 1):
+        succ = section_successors(s, axis=axis)
+        assert np.array_equal(np.sort(succ), np.arange(len(s.points)))
+        # a step along a section moves at most one column (or turns round within one)
+        d = np.abs(s.point_col[succ] - s.point_col)
+        assert np.all(d[:, axis] == 0) and np.all(d[:, 1 - axis] <= 1)
+
+
+def test_linking_a_sphere_gives_one_oriented_surface_with_small_holes():
+    obj = sphere()
+    s = sample(obj, qlev=5, blev=12)
+    L = link(s, obj)
+    t = topology(L.faces)
+    assert t.manifold_edges and t.oriented and t.components == 1
+    loops = boundary_loops(L.faces)
+    assert 0 < len(loops) and max(len(lp) for lp in loops) < 40
+    # outward orientation: positive signed volume
+    p = s.points[L.faces]
+    vol = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6
+    assert vol > 0
+    # the top cap is a regular grid of quads: 2 triangles per cell seen from above
+    assert len(L.quads) > 0.9 * len(s.points)
+
+
+@pytest.mark.parametrize("name, genus", [("sphere", 0), ("torus", 1), ("blob", 0), ("perturbed", 0),
+                                         ("boxsphere", 0)])
+def test_closed_objects_come_out_watertight_with_the_right_genus(name, genus):
+    r = triangulate_object(demo_object(name), qlev=5)
+    t = r.metrics.topology
+    assert t.watertight and t.components == 1 and t.boundary_loops == 0
+    assert t.genus == genus
+    assert len(r.loops) > 0  # there were holes, and they were filled
+    # the result keeps every linked quad face
+    q = {tuple(sorted(f)) for f in np.asarray(r.quad_mesh.faces).tolist()}
+    out = {tuple(sorted(f)) for f in np.asarray(r.faired.faces).tolist()}
+    assert len(q - out) <= int(r.region.sum())
+
+
+def test_liepa_filling_closes_every_hole_and_stages_are_recorded():
+    r = triangulate_object(torus(), FrepParams(qlev=5))
+    assert topology(np.asarray(r.quad_mesh.faces)).boundary_loops == len(r.loops) > 0
+    assert topology(np.asarray(r.filled.faces)).watertight  # after Liepa alone
+    assert r.filled_patch.sum() == sum(len(lp) - 2 for lp in r.loops)  # a disk of n-gon: n - 2 triangles
+    assert r.region.sum() >= r.filled_patch.sum()
+    assert r.refined_new.sum() == len(r.faired.vertices) - len(r.filled.vertices)
+    names = [n for n, _ in r.stages()]
+    assert names == ["points", "quads", "filled", "refined", "faired"]
+    rep = r.report()
+    assert rep["holes"] == len(r.loops) and rep["metrics"]["topology"]["genus"] == 1
+
+
+def test_metrics_on_a_sphere_are_small_and_consistent():
+    r = triangulate_object(sphere(0.8), qlev=6)
+    m = r.metrics
+    voxel = 2 / 64
+    assert m.voxel == pytest.approx(voxel)
+    # sample points lie on the surface to the linear-interpolation precision; new vertices near it
+    assert m.deviation_mean < 0.02 * voxel and m.deviation_max < 0.5 * voxel
+    assert m.projected_max == pytest.approx(m.deviation_max, rel=0.05)  # first order ~ exact for a sphere
+    # the true sphere distance agrees
+    d = np.abs(np.linalg.norm(r.mesh.vertices, axis=1) - 0.8)
+    assert d.max() == pytest.approx(m.projected_max, rel=1e-3, abs=1e-9)
+    assert m.face_normal_mean < 3 and m.vertex_normal_mean < 1.5
+    assert sum(m.histogram_counts) == m.faces
+    assert 0 < m.edge_cv < 1
+
+
+def test_projection_moves_new_vertices_onto_the_surface():
+    a = triangulate_object(blobs(), qlev=5)
+    b = triangulate_object(blobs(), qlev=5, project=True)
+    assert b.metrics.deviation_max < 1e-6 < a.metrics.deviation_max
+
+
+def test_params_are_validated():
+    for bad in ({"qlev": 0}, {"blev": 40}, {"diagonal": "BD"}, {"weight": "volume"}, {"fairing": "U3"},
+                {"side_slope": 2.0}):
+        with pytest.raises(ValueError, match=next(iter(bad))):
+            FrepParams(**bad)
