@@ -110,8 +110,8 @@ def test_metrics_on_a_sphere_are_small_and_consistent():
 
 
 def test_projection_moves_new_vertices_onto_the_surface():
-    a = triangulate_object(blobs(), qlev=5)
-    b = triangulate_object(blobs(), qlev=5, project=True)
+    a = triangulate_object(blobs(), qlev=5, project=False)
+    b = triangulate_object(blobs(), qlev=5)
     assert b.metrics.deviation_max < 1e-6 < a.metrics.deviation_max
 
 
@@ -120,3 +120,18 @@ def test_params_are_validated():
                 {"side_slope": 2.0}):
         with pytest.raises(ValueError, match=next(iter(bad))):
             FrepParams(**bad)
+
+
+@pytest.mark.parametrize("name, genus", [("sphere", 0), ("torus", 1)])
+def test_paper_literal_settings_are_watertight_too(name, genus):
+    # ABC/ACD split, only zero-projected-area side faces merged, no projection
+    r = triangulate_object(demo_object(name), qlev=5, diagonal="AC", side_slope=1e-6, project=False)
+    t = r.metrics.topology
+    assert t.watertight and t.genus == genus
+
+
+def test_quality_targets_on_a_sphere():
+    m = triangulate_object(sphere(0.8), qlev=6).metrics
+    assert m.angles.below_20 < 0.02  # issue target: under 2 % of angles below 20 degrees
+    assert m.edge_cv < 0.3 and m.face_normal_mean < 1.0
+    assert m.projected_max < 0.5 * m.voxel

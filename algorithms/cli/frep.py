@@ -18,13 +18,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="output mesh (.ply .obj .stl .off .ase)")
     p.add_argument("--qlev", type=int, default=6, help="quadtree depth: S_xy = 1/2^QLEV of the box (default 6)")
     p.add_argument("--blev", type=int, default=12, help="ray subdivision depth: S_z = 1/2^BLEV (default 12)")
-    p.add_argument("--diagonal", choices=("AC", "shorter"), default="AC",
-                   help="split quads ABCD as ABC+ACD (the paper) or along the shorter diagonal")
+    p.add_argument("--diagonal", choices=("AC", "shorter"), default="shorter",
+                   help="split quads ABCD along the shorter diagonal (default) or as ABC+ACD (the paper)")
     p.add_argument("--weight", choices=("area", "length"), default="area", help="Liepa weight for hole filling")
     p.add_argument("--no-merge", action="store_true", help="do not merge patches with zero-projected-area side faces")
+    p.add_argument("--side-slope", type=float, default=0.6,
+                   help="merge faces with |n_z| <= this into the refined region (default 0.6; 0 = only the "
+                        "paper's zero-projected-area side faces)")
     p.add_argument("--no-refine", action="store_true", help="fill holes without refinement (and fairing)")
     p.add_argument("--fairing", choices=("U2", "U1", "none"), default="U2", help="fairing of the new vertices")
-    p.add_argument("--project", action="store_true", help="finally move the new vertices onto F = 0")
+    p.add_argument("--no-project", action="store_true",
+                   help="leave the new vertices where fairing puts them (default: moved onto F = 0)")
     p.add_argument("--report", metavar="R.json", help="write the JSON report (stages, metrics, timings)")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
 
@@ -44,7 +48,8 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("the report and the mesh must be different files")
     params = FrepParams(qlev=args.qlev, blev=args.blev, diagonal=args.diagonal, weight=args.weight,
                         merge_sides=not args.no_merge, refine=not args.no_refine,
-                        fairing="none" if args.no_refine else args.fairing, project=args.project)
+                        fairing="none" if args.no_refine else args.fairing,
+                        side_slope=max(args.side_slope, 1e-6), project=not args.no_project)
     obj = load_spec(input_path(args))
     result = triangulate_object(obj, params)
     if out.suffix.lower() == ".ase":

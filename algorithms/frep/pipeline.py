@@ -34,14 +34,16 @@ FAIRINGS = ("U2", "U1", "none")
 class FrepParams:
     qlev: int = 6  # quadtree depth, S_xy = 1 / 2^qlev of the domain
     blev: int = 12  # ray subdivision depth, S_z = 1 / 2^blev
-    diagonal: str = "AC"  # quads split as ABC, ACD (the paper) or along the shorter diagonal
+    diagonal: str = "shorter"  # (choice) quads split along the shorter diagonal, or "AC": ABC, ACD (the paper)
     weight: str = "area"  # Liepa weight: "area" or "length" (minimum total edge length)
     merge_sides: bool = True  # merge patches with neighbouring zero-projected-area faces before refining
-    side_slope: float = 1e-6  # |n_z| below this (unit normal) counts as zero projected area
+    # faces with |n_z| <= side_slope (unit normal) are merged: ~0 is the paper's "zero projected
+    # area"; (choice) the default 0.6 also takes the steep, stretched faces next to them
+    side_slope: float = 0.6
     refine: bool = True  # centroid splitting + edge flips
     density: float = float(np.sqrt(2.0))  # alpha of the split test (1 = the spec literally, sqrt 2 = Liepa)
     fairing: str = "U2"  # U2 = 0 (bi-Laplacian), U1 = 0 (umbrella) or "none"
-    project: bool = False  # (choice) finally move the new vertices onto F = 0 along the gradient
+    project: bool = True  # (choice) finally move the new vertices onto F = 0 along the gradient
 
     def __post_init__(self) -> None:
         SamplingParams(self.qlev, self.blev)  # validates qlev and blev
