@@ -146,8 +146,12 @@ def link(s: Samples, obj: FRepObject, *, diagonal: str = "AC") -> Linked:
                (q[:, 1] != q[:, 2]) & (q[:, 1] != q[:, 3]) & (q[:, 2] != q[:, 3])
     q = q[distinct]
     if len(q):
-        _, first = np.unique(np.sort(q, axis=1), axis=0, return_index=True)
-        q = q[np.sort(first)]
+        sq = np.sort(q, axis=1)
+        n = len(s.points)
+        k1, k2 = sq[:, 0] * n + sq[:, 1], sq[:, 2] * n + sq[:, 3]  # two int64 keys (n^4 could overflow)
+        o = np.lexsort((k2, k1))
+        first = np.r_[True, (k1[o][1:] != k1[o][:-1]) | (k2[o][1:] != k2[o][:-1])]
+        q = q[np.sort(o[first])]
     # orientation: the walk turns one way where the surface faces +z and the other where it
     # faces -z, so each quad is oriented by the outward normal -grad F at its centre
     P = s.points
@@ -176,7 +180,8 @@ def _manifold_quads(faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], int]:
             break
         et = edge_table(faces)
         he = halfedges(faces)
-        _, inv, hcount = np.unique(he, axis=0, return_inverse=True, return_counts=True)
+        _, inv, hcount = np.unique(he[:, 0] * (int(faces.max()) + 1) + he[:, 1], return_inverse=True,
+                                   return_counts=True)
         bad_he = (et.counts[et.halfedge_edge] > 2) | (hcount[inv.ravel()] > 1)
         bad_face = bad_he.reshape(-1, 3).any(axis=1)
         if not bad_face.any():

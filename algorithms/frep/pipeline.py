@@ -178,7 +178,12 @@ def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: 
         else filled_patch.copy()
     splits = flips = 0
     if params.refine and region.any():
-        r = refine(V, pf[~region], pf[region], density=params.density)
+        # the fixed faces that touch the region are all refinement needs (the border's edge
+        # lengths l(v), and the edges a flip must not duplicate)
+        touch = np.zeros(len(V), dtype=bool)
+        touch[pf[region].ravel()] = True
+        ring = pf[~region & touch[pf].any(axis=1)]
+        r = refine(V, ring, pf[region], density=params.density)
         RV, RF = r.vertices, np.vstack([pf[~region], r.faces])
         splits, flips = r.splits, r.flips
     else:
