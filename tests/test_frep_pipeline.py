@@ -135,3 +135,12 @@ def test_quality_targets_on_a_sphere():
     assert m.angles.below_20 < 0.02  # issue target: under 2 % of angles below 20 degrees
     assert m.edge_cv < 0.3 and m.face_normal_mean < 1.0
     assert m.projected_max < 0.5 * m.voxel
+
+
+def test_tangential_smoothing_keeps_vertices_on_the_surface_and_evens_edges():
+    a = triangulate_object(torus(), qlev=5)
+    b = triangulate_object(torus(), qlev=5, smooth=5)
+    assert b.metrics.topology.watertight and b.metrics.topology.genus == 1
+    assert b.metrics.projected_max < 1e-9
+    assert b.metrics.edge_cv < a.metrics.edge_cv
+    assert np.array_equal(a.mesh.faces, b.mesh.faces)  # connectivity untouched

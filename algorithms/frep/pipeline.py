@@ -44,6 +44,7 @@ class FrepParams:
     density: float = float(np.sqrt(2.0))  # alpha of the split test (1 = the spec literally, sqrt 2 = Liepa)
     fairing: str = "U2"  # U2 = 0 (bi-Laplacian), U1 = 0 (umbrella) or "none"
     project: bool = True  # (choice) finally move the new vertices onto F = 0 along the gradient
+    smooth: int = 0  # (choice) rounds of tangential Laplacian smoothing of all vertices, each projected onto F = 0
 
     def __post_init__(self) -> None:
         SamplingParams(self.qlev, self.blev)  # validates qlev and blev
@@ -55,6 +56,8 @@ class FrepParams:
             raise ValueError(f"fairing must be one of {FAIRINGS}, got {self.fairing!r}")
         if not 0 <= self.side_slope < 1:
             raise ValueError(f"side_slope must be in [0, 1), got {self.side_slope}")
+        if not (isinstance(self.smooth, (int, np.integer)) and 0 <= self.smooth <= 100):
+            raise ValueError(f"smooth must be an integer in 0..100, got {self.smooth!r}")
         if not self.density > 0:
             raise ValueError(f"density must be > 0, got {self.density}")
 
@@ -151,6 +154,24 @@ def _merge_region(faces: NDArray[np.int64], patch: NDArray[np.bool_], side: NDAr
     return out
 
 
+def tangential_smooth(obj: FRepObject, vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
+                      rounds: int, step: float = 0.5) -> NDArray[np.float64]:
+    """(choice) Move every vertex towards the mean of its neighbours within the tangent plane
+    (normal -grad F), then back onto F = 0; evens out edge lengths and angles."""
+    from ..darning.fair import uniform_laplacian
+
+    L = uniform_laplacian(len(vertices), faces)  # (L p)_v = mean of the neighbours - p_v
+    p = np.array(vertices, dtype=np.float64, copy=True)
+    used = np.unique(faces)
+    for _ in range(rounds):  # sequential: each round starts from the previous positions
+        u = (L @ p)[used]
+        g = obj.gradient(p[used])
+        g /= np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)
+        u -= np.einsum("ij,ij->i", u, g)[:, None] * g
+        p[used] = project(obj, p[used] + step * u, steps=3)
+    return p
+
+
 def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: object) -> FrepResult:
     from ..darning import darn, fair, refine  # the shared darning implementation
 
@@ -199,6 +220,8 @@ def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: 
     if params.project and new.any():
         FV = FV.copy()
         FV[new] = project(obj, FV[new])
+    if params.smooth:
+        FV = tangential_smooth(obj, FV, RF, rounds=params.smooth)
     faired = Mesh(FV, RF)
     timings["fairing"] = time.perf_counter() - t0
     t0 = time.perf_counter()
