@@ -125,6 +125,10 @@ is not installed here; measured earlier for the issue at 1.5-240 s on these kind
 
 {table(headers, rows)}
 """
+    import os
+
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    body += f"\nLoad average at the end of the run: {load:.1f} (times grow with a busy machine).\n"
     write_section("frep", body)
     print(body)
 

@@ -91,3 +91,11 @@ def test_spec_loading_errors(tmp_path):
     p.write_text(json.dumps({"F": "x", "bounds": [[0, 0, 0], [0, 1, 1]]}))
     with pytest.raises(InputError, match="bounds"):
         load_spec(p)
+
+
+def test_cli_frep_empty_object_is_an_error(tmp_path, capsys):
+    spec = tmp_path / "e.json"
+    spec.write_text(json.dumps({"F": "-1 - x**2"}))
+    assert main(["frep", str(spec), "-o", str(tmp_path / "e.ply"), "--qlev", "3"]) == 2
+    assert "no surface" in capsys.readouterr().err
+    assert not (tmp_path / "e.ply").exists()

@@ -87,8 +87,13 @@ def test_liepa_filling_closes_every_hole_and_stages_are_recorded():
     assert r.filled_patch.sum() == sum(len(lp) - 2 for lp in r.loops)  # a disk of n-gon: n - 2 triangles
     assert r.region.sum() >= r.filled_patch.sum()
     assert r.refined_new.sum() == len(r.faired.vertices) - len(r.filled.vertices)
-    names = [n for n, _ in r.stages()]
-    assert names == ["points", "quads", "filled", "refined", "faired"]
+    stages = r.stages()
+    assert [st.name for st in stages] == ["points", "quads", "holes", "filled", "region", "refined", "faired"]
+    for st in stages:
+        assert st.highlight is None or len(st.highlight) == len(st.faces)
+        assert not len(st.faces) or st.faces.max() < len(st.vertices)
+    assert len(stages[2].loops) == len(r.loops)
+    assert stages[-1].highlight.sum() == len(r.faired.faces) - int((~r.region).sum())
     rep = r.report()
     assert rep["holes"] == len(r.loops) and rep["metrics"]["topology"]["genus"] == 1
 

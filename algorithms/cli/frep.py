@@ -56,6 +56,8 @@ def run(args: argparse.Namespace) -> int:
                         smooth=args.smooth)
     obj = load_spec(input_path(args))
     result = triangulate_object(obj, params)
+    if not len(result.mesh.faces):
+        raise InputError(f"{obj.name}: no surface found in the box {list(obj.bounds)} (F < 0 everywhere sampled)")
     if out.suffix.lower() == ".ase":
         save_ase(result.mesh, out, force=args.force, name=obj.name)
     else:

@@ -63,6 +63,18 @@ class FrepParams:
 
 
 @dataclass(frozen=True, eq=False)
+class Stage:
+    """One step of the pipeline for replay: vertices, faces (none for the points), an optional
+    (F,) face highlight and the hole loops (vertex ids)."""
+
+    name: str
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    highlight: NDArray[np.bool_] | None = None
+    loops: tuple[NDArray[np.int64], ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
 class FrepResult:
     """Every stage of one run.
 
@@ -95,10 +107,23 @@ class FrepResult:
     def mesh(self) -> Mesh:
         return self.faired
 
-    def stages(self) -> list[tuple[str, Mesh | NDArray[np.float64]]]:
-        """The stages in order, for the explorer's timeline."""
-        return [("points", self.samples.points), ("quads", self.quad_mesh), ("filled", self.filled),
-                ("refined", self.refined), ("faired", self.faired)]
+    def stages(self) -> list[Stage]:
+        """The stages in order, for the explorer's timeline: points, quads, holes (the quad mesh
+        with the hole loops), filled (patch faces highlighted), region (faces handed to
+        refinement highlighted), refined (new faces highlighted), faired (the result)."""
+        nof = np.zeros((0, 3), dtype=np.int64)
+        q, f, rf = self.quad_mesh, self.filled, self.refined
+        fixed = int((~self.region).sum())
+        refined_mask = np.r_[np.zeros(fixed, bool), np.ones(len(rf.faces) - fixed, bool)]
+        return [
+            Stage("points", self.samples.points, nof),
+            Stage("quads", q.vertices, q.faces),
+            Stage("holes", q.vertices, q.faces, loops=tuple(self.loops)),
+            Stage("filled", f.vertices, f.faces, highlight=self.filled_patch),
+            Stage("region", f.vertices, f.faces, highlight=self.region),
+            Stage("refined", rf.vertices, rf.faces, highlight=refined_mask),
+            Stage("faired", self.faired.vertices, self.faired.faces, highlight=refined_mask),
+        ]
 
     def report(self) -> dict:
         p = self.params
