@@ -74,6 +74,8 @@ def test_closed_objects_come_out_watertight_with_the_right_genus(name, genus):
     assert t.watertight and t.components == 1 and t.boundary_loops == 0
     assert t.genus == genus
     assert len(r.loops) > 0  # there were holes, and they were filled
+    p = np.asarray(r.mesh.vertices)[np.asarray(r.mesh.faces)]
+    assert np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() > 0  # outward
     # the result keeps every linked quad face
     q = {tuple(sorted(f)) for f in np.asarray(r.quad_mesh.faces).tolist()}
     out = {tuple(sorted(f)) for f in np.asarray(r.faired.faces).tolist()}
@@ -149,3 +151,11 @@ def test_tangential_smoothing_keeps_vertices_on_the_surface_and_evens_edges():
     assert b.metrics.projected_max < 1e-9
     assert b.metrics.edge_cv < a.metrics.edge_cv
     assert np.array_equal(a.mesh.faces, b.mesh.faces)  # connectivity untouched
+
+
+@pytest.mark.parametrize("name, volume", [("sphere", 4 / 3 * np.pi * 0.8**3), ("torus", 2 * np.pi**2 * 0.6 * 0.25**2)])
+def test_enclosed_volume_matches_the_analytic_one(name, volume):
+    r = triangulate_object(demo_object(name), qlev=6)
+    p = np.asarray(r.mesh.vertices)[np.asarray(r.mesh.faces)]
+    vol = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6
+    assert vol == pytest.approx(volume, rel=0.01)
