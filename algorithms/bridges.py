@@ -122,6 +122,7 @@ def auto_lc(sources: Sources) -> float:
 
 
 def field_context(model: Icadm, params: FieldParams) -> FieldContext:
+    """Loop frames, units, L_c and step (automatic unless given), BVH (full mode), free points (full mode)."""
     frames = tuple(summarize(model, charge=params.charge).loops)
     isl = np.array([f.island for f in frames], dtype=np.int64)
     if len(np.unique(isl)) >= 2:
@@ -274,9 +275,9 @@ def find_candidate_bridges(model: Icadm, params: FieldParams, *, progress: Calla
 
     t = time.perf_counter()
     report(0.0, "boundary frames")
-    if not len(summarize(model).loops):
-        return BridgeSet(params, float(params.lc or 0.0), (), (), {"total": time.perf_counter() - t_all})
     ctx = field_context(model, params)
+    if not ctx.frames:
+        return BridgeSet(params, float(params.lc or 0.0), (), (), {"total": time.perf_counter() - t_all})
     params_used = replace(params, lc=ctx.lc, step=ctx.step)
     ctx = replace(ctx, params=params_used)
     timings["setup"] = time.perf_counter() - t

@@ -32,6 +32,7 @@ from .shielding import Bvh, segment_blocked
 Arr = NDArray[np.float64]
 PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: a Gaussian q1 beyond 4 L_c is negligible
 NO_GROUP = -2
+SERIAL_BELOW = 16  # fewer points than this: one thread (a tracing step)
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,111 +86,154 @@ def _q1(l2, lc2, kernel):
     return 1.0 / (1.0 + l2 / lc2)
 
 
-@numba.njit(cache=True, parallel=True, fastmath=True)
-def _field_light(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+@numba.njit(cache=True, fastmath=True)
+def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
                  out_h, out_near, out_dist):
-    """Light mode (M1): H at each point, no shielding, q12 = q1(L). Also the nearest source."""
-    n = x.shape[0]
+    """Light mode (M1) at point i: H, no shielding, q12 = q1(L). Also the nearest source."""
     m = o.shape[0]
-    for i in numba.prange(n):
-        x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
-        h00 = h01 = h02 = h10 = h11 = h12 = h20 = h21 = h22 = 0.0
-        best = 1e300
-        bj = -1
-        for j in range(m):
-            if sgrp[j] == xgrp[i]:
+    x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+    h00 = h01 = h02 = h10 = h11 = h12 = h20 = h21 = h22 = 0.0
+    best = 1e300
+    bj = -1
+    for j in range(m):
+        if sgrp[j] == xgrp[i]:
+            continue
+        if xwin[i] >= 0 and sloop[j] == xloop[i]:
+            dp = abs(spos[j] - xpos[i])
+            dp = min(dp, slen[j] - dp)
+            if dp <= xwin[i]:
                 continue
-            if xwin[i] >= 0 and sloop[j] == xloop[i]:
-                dp = abs(spos[j] - xpos[i])
-                dp = min(dp, slen[j] - dp)
-                if dp <= xwin[i]:
-                    continue
-            r0 = o[j, 0] - x0
-            r1 = o[j, 1] - x1
-            r2 = o[j, 2] - x2
-            l2 = r0 * r0 + r1 * r1 + r2 * r2
-            if l2 < best:
-                best = l2
-                bj = j
-            if l2 > prune2 or l2 < 1e-300:
-                continue
-            il = 1.0 / np.sqrt(l2)
-            d0, d1, d2 = r0 * il, r1 * il, r2 * il  # (6)
-            t0, t1, t2 = tau[j, 0], tau[j, 1], tau[j, 2]
-            s0 = t1 * d2 - t2 * d1  # s_O = tau_O x d
-            s1 = t2 * d0 - t0 * d2
-            s2 = t0 * d1 - t1 * d0
-            q4 = 0.5 * (1.0 - (d0 * b[j, 0] + d1 * b[j, 1] + d2 * b[j, 2]))  # (7): s_O . n_O = -d . b_O
-            w = h[j] * _q1(l2, lc2, kernel) * (1.0 + ki * q4)  # h_O g, (13) with q12 = q1(L)
-            wd0, wd1, wd2 = w * d0, w * d1, w * d2
-            h00 += wd0 * s0
-            h01 += wd0 * s1
-            h02 += wd0 * s2
-            h10 += wd1 * s0
-            h11 += wd1 * s1
-            h12 += wd1 * s2
-            h20 += wd2 * s0
-            h21 += wd2 * s1
-            h22 += wd2 * s2
-        out_h[i, 0], out_h[i, 1], out_h[i, 2] = h00, h01, h02
-        out_h[i, 3], out_h[i, 4], out_h[i, 5] = h10, h11, h12
-        out_h[i, 6], out_h[i, 7], out_h[i, 8] = h20, h21, h22
-        out_near[i] = bj
-        out_dist[i] = np.sqrt(best) if bj >= 0 else np.inf
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
+        if l2 < best:
+            best = l2
+            bj = j
+        if l2 > prune2 or l2 < 1e-300:
+            continue
+        il = 1.0 / np.sqrt(l2)
+        d0, d1, d2 = r0 * il, r1 * il, r2 * il  # (6)
+        t0, t1, t2 = tau[j, 0], tau[j, 1], tau[j, 2]
+        s0 = t1 * d2 - t2 * d1  # s_O = tau_O x d
+        s1 = t2 * d0 - t0 * d2
+        s2 = t0 * d1 - t1 * d0
+        q4 = 0.5 * (1.0 - (d0 * b[j, 0] + d1 * b[j, 1] + d2 * b[j, 2]))  # (7): s_O . n_O = -d . b_O
+        w = h[j] * _q1(l2, lc2, kernel) * (1.0 + ki * q4)  # h_O g, (13) with q12 = q1(L)
+        wd0, wd1, wd2 = w * d0, w * d1, w * d2
+        h00 += wd0 * s0
+        h01 += wd0 * s1
+        h02 += wd0 * s2
+        h10 += wd1 * s0
+        h11 += wd1 * s1
+        h12 += wd1 * s2
+        h20 += wd2 * s0
+        h21 += wd2 * s1
+        h22 += wd2 * s2
+    out_h[i, 0], out_h[i, 1], out_h[i, 2] = h00, h01, h02
+    out_h[i, 3], out_h[i, 4], out_h[i, 5] = h10, h11, h12
+    out_h[i, 6], out_h[i, 7], out_h[i, 8] = h20, h21, h22
+    out_near[i] = bj
+    out_dist[i] = np.sqrt(best) if bj >= 0 else np.inf
 
 
 @numba.njit(cache=True, parallel=True)
-def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+def _field_light(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                 out_h, out_near, out_dist):
+    """Light mode over all points, parallel (threads over points)."""
+    for i in numba.prange(x.shape[0]):
+        _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                     out_h, out_near, out_dist)
+
+
+@numba.njit(cache=True)
+def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                        out_h, out_near, out_dist):
+    """Light mode, one thread: for the few points of a tracing step (no thread start-up cost)."""
+    for i in range(x.shape[0]):
+        _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                     out_h, out_near, out_dist)
+
+
+@numba.njit(cache=True)
+def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs):
-    """Full mode (M2): shielding delta (15) and q12 = q1(q2) with free points (4, 8)."""
-    n = x.shape[0]
+    """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8)."""
     m = o.shape[0]
-    for i in numba.prange(n):
-        xi = x[i]
-        acc = np.zeros(9)
-        best = 1e300
-        bj = -1
-        pairs = 0
-        for j in range(m):
-            if sgrp[j] == xgrp[i]:
+    xi = x[i]
+    acc = np.zeros(9)
+    best = 1e300
+    bj = -1
+    pairs = 0
+    for j in range(m):
+        if sgrp[j] == xgrp[i]:
+            continue
+        if xwin[i] >= 0 and sloop[j] == xloop[i]:
+            dp = abs(spos[j] - xpos[i])
+            dp = min(dp, slen[j] - dp)
+            if dp <= xwin[i]:
                 continue
-            if xwin[i] >= 0 and sloop[j] == xloop[i]:
-                dp = abs(spos[j] - xpos[i])
-                dp = min(dp, slen[j] - dp)
-                if dp <= xwin[i]:
-                    continue
-            r = o[j] - xi
-            l2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
-            if l2 < best:
-                best = l2
-                bj = j
-            if l2 > prune2 or l2 < 1e-300:
-                continue
-            pairs += 1
-            if shield and segment_blocked(xi, o[j], xv[i], ov[j], node_min, node_max, node_left, node_right,
-                                          node_start, node_count, tri, tri_vertex, scale):
-                continue  # (15) delta_XO = 0
-            length = np.sqrt(l2)
-            d = r / length  # (6)
-            s = np.cross(tau[j], d)  # s_O = tau_O x d
-            q4 = 0.5 * (1.0 - d @ b[j])  # (7)
-            if use_fp:
-                q2 = q2_kernel(xi, o[j], length, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2,
-                               g_kernel)  # (4)
-                q12 = _q1(q2 * q2, lc2, kernel)  # (8)
-            else:
-                q12 = _q1(l2, lc2, kernel)
-            w = h[j] * q12 * (1.0 + ki * q4)  # (13)
-            for a in range(3):
-                for c in range(3):
-                    acc[3 * a + c] += w * d[a] * s[c]  # (12)-(14): h g d s^T
-        for k in range(9):
-            out_h[i, k] = acc[k]
-        out_near[i] = bj
-        out_dist[i] = np.sqrt(best) if bj >= 0 else np.inf
-        out_pairs[i] = pairs
+        r = o[j] - xi
+        l2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+        if l2 < best:
+            best = l2
+            bj = j
+        if l2 > prune2 or l2 < 1e-300:
+            continue
+        pairs += 1
+        if shield and segment_blocked(xi, o[j], xv[i], ov[j], node_min, node_max, node_left, node_right,
+                                      node_start, node_count, tri, tri_vertex, scale):
+            continue  # (15) delta_XO = 0
+        length = np.sqrt(l2)
+        d = r / length  # (6)
+        s = np.cross(tau[j], d)  # s_O = tau_O x d
+        q4 = 0.5 * (1.0 - d @ b[j])  # (7)
+        if use_fp:
+            q2 = q2_kernel(xi, o[j], length, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2,
+                           g_kernel)  # (4)
+            q12 = _q1(q2 * q2, lc2, kernel)  # (8)
+        else:
+            q12 = _q1(l2, lc2, kernel)
+        w = h[j] * q12 * (1.0 + ki * q4)  # (13)
+        for a in range(3):
+            for c in range(3):
+                acc[3 * a + c] += w * d[a] * s[c]  # (12)-(14): h g d s^T
+    for k in range(9):
+        out_h[i, k] = acc[k]
+    out_near[i] = bj
+    out_dist[i] = np.sqrt(best) if bj >= 0 else np.inf
+    out_pairs[i] = pairs
+
+
+@numba.njit(cache=True, parallel=True)
+def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                out_h, out_near, out_dist, out_pairs):
+    for i in numba.prange(x.shape[0]):
+        _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                out_h, out_near, out_dist, out_pairs)
+
+
+@numba.njit(cache=True)
+def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                out_h, out_near, out_dist, out_pairs):
+    for i in range(x.shape[0]):
+        _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                out_h, out_near, out_dist, out_pairs)
 
 
 @dataclass(frozen=True)
@@ -229,6 +273,25 @@ def top_normal(H: Arr, t: Arr, hint: Arr | None = None) -> tuple[Arr, Arr]:
     return n, np.linalg.norm(f, axis=1)
 
 
+@numba.njit(cache=True)
+def _normal_one(hm, t, hint):
+    """(16b) for one point: top eigenvector of P H^T H P (P = I - t t^T), sign n . hint >= 0.
+    Returns (n, H n)."""
+    tn = np.sqrt(t @ t)
+    tt = t / tn if tn > 0 else t * 0.0
+    P = np.eye(3) - np.outer(tt, tt)
+    HP = hm @ P
+    w, v = np.linalg.eigh(HP.T @ HP)
+    n = v[:, 2].copy()
+    n = n - (n @ tt) * tt
+    nn = np.sqrt(n @ n)
+    if nn > 0:
+        n = n / nn
+    if n @ hint < 0:
+        n = -n
+    return n, hm @ n
+
+
 class IndicatorField:
     """BIAF over a set of sources (the field of §4) with the parameters' mode.
 
@@ -254,6 +317,12 @@ class IndicatorField:
             self.prune = PRUNE_GAUSS * self.lc * (1.0 + gmax)  # q2 >= L / (1 + max sum G)
         else:
             self.prune = np.inf
+
+    def sample_one(self, x: Arr, tangent: Arr, hint: Arr) -> tuple[Arr, Arr, float]:
+        """One point, no exclusions (a tracing step): (n, F = H n, |F|) with n from (16b)."""
+        ev = self.evaluate(np.asarray(x, dtype=np.float64).reshape(1, 3))
+        n, f = _normal_one(ev.H[0], np.asarray(tangent, dtype=np.float64), np.asarray(hint, dtype=np.float64))
+        return n, f, float(np.sqrt(f @ f))
 
     @property
     def full(self) -> bool:
@@ -287,7 +356,8 @@ class IndicatorField:
         for a in range(0, n, self.chunk):
             sl = slice(a, min(a + self.chunk, n))
             if not self.full:
-                _field_light(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
+                kern = _field_light if sl.stop - sl.start >= SERIAL_BELOW else _field_light_serial
+                kern(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
                              S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2, H[sl], near[sl], dist[sl])
                 pairs += (sl.stop - sl.start) * len(S)
             else:
@@ -295,7 +365,8 @@ class IndicatorField:
                 barr = bvh.arrays() if bvh is not None else _EMPTY_BVH
                 garr = grid_args(self.free) if self.free is not None else _EMPTY_GRID
                 cnt = np.zeros(sl.stop - sl.start, dtype=np.int64)
-                _field_full(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
+                kern = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
+                kern(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
                             S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
                             self.shield, *barr, bvh.scale if bvh is not None else 1.0,
                             self.free is not None, *garr, H[sl], near[sl], dist[sl], cnt)

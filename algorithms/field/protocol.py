@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .free_points import FreePoints, praf_normal, praf_potential
-from .indicator import IndicatorField, top_normal
+from .indicator import IndicatorField
 
 Arr = NDArray[np.float64]
 INDICES = frozenset({"potential", "force", "normal", "attraction"})
@@ -74,14 +74,11 @@ class Biaf:
         self.field = field
 
     def sample(self, x: Arr, tangent: Arr, hint: Arr) -> FieldSample:
-        ev = self.field.evaluate(np.asarray(x, dtype=np.float64)[None])
-        n, ten = top_normal(ev.H, np.asarray(tangent)[None], np.asarray(hint)[None])  # (16a)/(16b)
-        f = ev.H[0] @ n[0]  # (11) f = H n
-        return FieldSample(float(ten[0]), f, n[0])
+        n, f, ten = self.field.sample_one(x, tangent, hint)  # (16a)/(16b), (11) f = H n
+        return FieldSample(ten, f, n)
 
     def potential(self, x: Arr, tangent: Arr) -> float:
-        ev = self.field.evaluate(np.asarray(x, dtype=np.float64)[None])
-        return float(top_normal(ev.H, np.asarray(tangent)[None])[1][0])
+        return self.field.sample_one(x, tangent, np.zeros(3))[2]
 
     def attraction(self, x: Arr, tangent: Arr, hint: Arr, outward: Arr) -> float:
         s = self.sample(x, tangent, hint)
