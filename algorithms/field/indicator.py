@@ -30,7 +30,7 @@ from .free_points import FreePoints, grid_args, q2_kernel
 from .shielding import Bvh, segment_blocked
 
 Arr = NDArray[np.float64]
-PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: a Gaussian q1 beyond 4 L_c is negligible
+PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: relative weight below which a Gaussian source is skipped
 NO_GROUP = -2
 SERIAL_BELOW = 16  # fewer points than this: one thread (a tracing step)
 
@@ -110,7 +110,7 @@ def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos,
         if l2 < best:
             best = l2
             bj = j
-        if l2 > prune2 or l2 < 1e-300:
+        if l2 < 1e-300:
             continue
         il = 1.0 / np.sqrt(l2)
         d0, d1, d2 = r0 * il, r1 * il, r2 * il  # (6)
@@ -157,7 +157,7 @@ def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, s
 
 @numba.njit(cache=True)
 def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2,
+                lc2, ki, kernel, prune2, shrink2,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs):
@@ -168,7 +168,7 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     best = 1e300
     bj = -1
     pairs = 0
-    for j in range(m):
+    for j in range(m):  # pass 1: the nearest admissible source
         if sgrp[j] == xgrp[i]:
             continue
         if xwin[i] >= 0 and sloop[j] == xloop[i]:
@@ -181,7 +181,19 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         if l2 < best:
             best = l2
             bj = j
-        if l2 > prune2 or l2 < 1e-300:
+    # relative pruning: skip a source whose weight is below ~1e-7 of the nearest one's
+    # ((L * shrink)^2 - best > prune2 with shrink = 1 / (1 + max sum G): q2 >= L * shrink)
+    for j in range(m):  # pass 2: the field
+        if sgrp[j] == xgrp[i]:
+            continue
+        if xwin[i] >= 0 and sloop[j] == xloop[i]:
+            dp = abs(spos[j] - xpos[i])
+            dp = min(dp, slen[j] - dp)
+            if dp <= xwin[i]:
+                continue
+        r = o[j] - xi
+        l2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+        if l2 * shrink2 - best > prune2 or l2 < 1e-300:
             continue
         pairs += 1
         if shield and segment_blocked(xi, o[j], xv[i], ov[j], node_min, node_max, node_left, node_right,
@@ -210,13 +222,13 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
 
 @numba.njit(cache=True, parallel=True)
 def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2,
+                lc2, ki, kernel, prune2, shrink2,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs):
     for i in numba.prange(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2,
+                lc2, ki, kernel, prune2, shrink2,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs)
@@ -224,13 +236,13 @@ def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, s
 
 @numba.njit(cache=True)
 def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2,
+                lc2, ki, kernel, prune2, shrink2,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs):
     for i in range(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2,
+                lc2, ki, kernel, prune2, shrink2,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs)
@@ -313,10 +325,11 @@ class IndicatorField:
         self.chunk = int(chunk)
         self.kernel = 0 if params.q1_kernel == "gauss" else 1
         gmax = self.free.g_max if self.free is not None else 0.0
-        if self.kernel == 0:
-            self.prune = PRUNE_GAUSS * self.lc * (1.0 + gmax)  # q2 >= L / (1 + max sum G)
-        else:
-            self.prune = np.inf
+        # full mode: a Gaussian source is skipped when its weight is below exp(-16) of the nearest
+        # one's even after free points shorten it as much as they can (q2 >= L / (1 + max sum G));
+        # the heavy-tailed kernel is never pruned.
+        self.prune = PRUNE_GAUSS * self.lc if self.kernel == 0 else np.inf
+        self.shrink = 1.0 / (1.0 + gmax)
 
     def sample_one(self, x: Arr, tangent: Arr, hint: Arr) -> tuple[Arr, Arr, float]:
         """One point, no exclusions (a tracing step): (n, F = H n, |F|) with n from (16b)."""
@@ -368,6 +381,7 @@ class IndicatorField:
                 kern = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
                 kern(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
                             S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
+                     self.shrink ** 2,
                             self.shield, *barr, bvh.scale if bvh is not None else 1.0,
                             self.free is not None, *garr, H[sl], near[sl], dist[sl], cnt)
                 pairs += int(cnt.sum())
