@@ -192,7 +192,8 @@ def walk_holes(loops: list[NDArray[np.int64]], bridges: list[Bridge],
     return holes
 
 
-def split_polygon(polygon: tuple[int, ...], i: int, j: int, chain: NDArray[np.int64]) -> tuple[tuple[int, ...], tuple[int, ...]]:
+def split_polygon(polygon: tuple[int, ...], i: int, j: int,
+                  chain: NDArray[np.int64]) -> tuple[tuple[int, ...], tuple[int, ...]]:
     """Split a hole polygon by a chain from polygon[i] to polygon[j] (interior vertices).
 
     Each half walks the chain once, in opposite directions, so the two patches share it.

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .boundary import loop_frames, summarize, vertex_normals
-from .bridge_graph import Bridge, ConflictRules, GraphState, Hole, resample_chain, split_polygon, walk_holes
+from .bridge_graph import Bridge, ConflictRules, GraphState, resample_chain, split_polygon, walk_holes
 from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
 from .metrics import angle_stats, min_angles, topology
@@ -41,6 +41,7 @@ class RepairParams:
     tunnels: str = "auto"  # auto: detect lost handles by the tunnel rule; on: join the best pair; off
     darning: str = "liepa-fair"  # fan (the paper's), liepa (min-weight DP), liepa-fair (+ refine + fair)
     weight: str = "area"  # Liepa weight: "area" or "length"
+    fairing: str = "U3"  # final fairing of all new vertices (liepa-fair): U3 (curvature), U2 or U1
     hole_test: SimpleHoleTest | None = None  # None: the test of the darning method
     max_split_depth: int = 6  # recursion limit of hole splitting
     spacing_factor: float = 1.0  # bridge chain spacing = factor x mean boundary edge length
@@ -52,6 +53,8 @@ class RepairParams:
             raise ValueError(f"parameter tunnels={self.tunnels!r}: must be one of {', '.join(TUNNELS)}")
         if self.darning not in DARNING:
             raise ValueError(f"parameter darning={self.darning!r}: must be one of {', '.join(DARNING)}")
+        if self.fairing not in ("U1", "U2", "U3"):
+            raise ValueError(f"parameter fairing={self.fairing!r}: must be U1, U2 or U3")
         if self.weight not in ("area", "length"):
             raise ValueError(f"parameter weight={self.weight!r}: must be 'area' or 'length'")
         if not (0 <= self.max_split_depth <= 64):
@@ -230,8 +233,10 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     candidates: list[tuple[ForceLine, str]] = []
     if n_isl > 1:
         step(0.05, "tracing force lines between islands")
-        found = rf.island_lines(model, params.field, progress=progress, cancel=cancel)
+        found = rf.island_lines(model, params.field, cancel=cancel,
+                                progress=(lambda f, m: step(0.05 + 0.3 * f, m)) if progress else None)
         lc_used = found.lc
+        lines += list(found.all_lines)
         candidates += [(ln, "island") for ln in found.lines]
     timings["bridges"] = time.perf_counter() - t0
 
@@ -256,15 +261,15 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     state = GraphState(work.V(), loop_of, [len(lp) for lp in loops], rules)
     order = sorted(range(len(candidates)), key=lambda i: -candidates[i][0].quality)
     cand_bridges: list[tuple[int, Bridge, ForceLine]] = []
+    line_index = {id(ln): k for k, ln in enumerate(lines)}
     for i in order:
         ln, kind = candidates[i]
-        lines.append(ln)
         if not ln.arrived or ln.end_vertex < 0 or ln.start_vertex not in loop_of or ln.end_vertex not in loop_of:
             continue
         poly = np.vstack([mesh.vertices[ln.start_vertex], ln.points[1:-1], mesh.vertices[ln.end_vertex]])
         b = Bridge(int(ln.start_vertex), int(ln.end_vertex), resample_chain(poly, spacing), float(ln.quality),
-                   kind, len(lines) - 1)
-        cand_bridges.append((len(lines) - 1, b, ln))
+                   kind, line_index.get(id(ln), -1))
+        cand_bridges.append((b.candidate, b, ln))
     pending = []
     for idx, b, ln in cand_bridges:
         why = state.conflict(b)
@@ -335,7 +340,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             continue
         any_complex = True
         frame = polygon_frame(V, N, poly, charge=params.field.charge)
-        split = rf.split_line(frame, params.field, cancel=cancel)
+        split = rf.split_line(model, frame, params.field, cancel=cancel)
         if split is None:
             records.append(HoleRecord(poly, verdict, origin, -1, "no force line splits it"))
             final.append(poly)
@@ -359,14 +364,21 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
 
     t0 = time.perf_counter()
     n_before = len(work.F())
+    n_input = model.mesh.n_vertices
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
         V, F = work.V(), work.F()
         patch = darn(V, F, np.asarray(poly, dtype=np.int64), method=params.darning, weight=params.weight)
         work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
         work.faces.append(np.asarray(patch.faces, dtype=np.int64))
-    timings["darn"] = time.perf_counter() - t0
     V, F = work.V(), work.F()
+    if params.darning == "liepa-fair" and len(V) > n_input:
+        # fair every new vertex together (patch interiors and bridge chains), the input fixed:
+        # the force lines chose the topology; the final shape is the smoothest continuation
+        from .darning.fair import fair
+
+        V = fair(V, F, np.arange(n_input, len(V)), operator=params.fairing, weights="cotan")
+    timings["darn"] = time.perf_counter() - t0
     new_faces = np.arange(n_before, len(F))
     stages.append(Stage("darned", f"{len(final)} holes darned with {params.darning}: {len(F) - n_before} new faces",
                         vertices=V, faces=F, bridges=tuple(b.polyline(V) for b in bridges)))
