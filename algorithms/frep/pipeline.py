@@ -213,7 +213,12 @@ def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: 
     t0 = time.perf_counter()
     V, F = np.asarray(quad_mesh.vertices), np.asarray(quad_mesh.faces)
     loops = boundary_loops(F)
-    patches = [darn(V, F, lp, method="liepa", weight=params.weight).faces for lp in loops]
+    # darn() only looks at the faces around the loop: hand it those that touch any hole border
+    on_loop = np.zeros(len(V), dtype=bool)
+    if loops:
+        on_loop[np.concatenate(loops)] = True
+    near = F[on_loop[F].any(axis=1)]
+    patches = [darn(V, near, lp, method="liepa", weight=params.weight).faces for lp in loops]
     pf = np.vstack([F, *patches]) if patches else F
     filled = Mesh(V, pf)
     filled_patch = np.r_[np.zeros(len(F), bool), np.ones(len(pf) - len(F), bool)]
