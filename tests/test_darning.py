@@ -248,3 +248,18 @@ def test_brute_force_enumeration_is_catalan():
     for n, cat in zip(range(3, 9), (1, 2, 5, 14, 42, 132)):
         assert len(list(_all_triangulations(0, n - 1))) == cat
     assert list(itertools.islice(_all_triangulations(0, 2), 2)) == [[(0, 1, 2)]]
+
+
+def test_darn_a_bare_loop_without_surrounding_faces():
+    # a hole bounded by vertex chains only (like bridges whose other side is not filled yet)
+    n = 30
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    v = np.stack([np.cos(t), np.sin(t), 0.3 * np.cos(2 * t)], 1)
+    for method in METHODS:
+        p = darn(v, np.zeros((0, 3), dtype=np.int64), np.arange(n), method=method)
+        vv = np.vstack([v, p.new_vertices])
+        topo = metrics.topology(p.faces)
+        assert topo.boundary_loops == 1 and topo.oriented and topo.components == 1 and topo.euler == 1
+        if method in ("liepa-refine", "liepa-fair"):
+            assert len(p.new_vertices) > 20  # the loop's own edge lengths set the scale
+            assert metrics.min_angles(vv, p.faces).min() > 15.0

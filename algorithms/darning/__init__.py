@@ -33,7 +33,7 @@ from ..topology import boundary_loops, halfedges
 from .fair import WEIGHTINGS, fair
 from .fan import fan
 from .liepa import WEIGHTS, triangulate
-from .refine import refine, relax
+from .refine import edge_scale, refine, relax
 
 METHODS = ("fan", "liepa", "liepa-refine", "liepa-fair")
 DEFAULT_METHOD = "liepa-fair"
@@ -144,14 +144,22 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         return Patch(np.zeros((0, 3)), patch_faces, lp, method, weight)
     if fair_rounds < 1:
         raise ValueError(f"fair_rounds must be >= 1, got {fair_rounds}")
-    r = refine(v, ring, patch_faces, density=density)
+    # l(v) (frep.md §4): mean length of v's edges outside the patch; a loop vertex without any
+    # (e.g. on a bridge chain, whose other side is not filled yet) takes its two loop edges' mean
+    scale = edge_scale(v, ring, nv)
+    ln = np.linalg.norm(v[np.roll(lp, -1)] - v[lp], axis=1)  # loop edge j = (lp[j], lp[j+1])
+    loop_mean = (ln + np.roll(ln, 1)) / 2
+    scale[lp] = np.where(np.isfinite(scale[lp]), scale[lp], loop_mean)
+    r = refine(v, ring, patch_faces, density=density, scale=scale)
     P, pf, splits, flips = r.vertices, r.faces, r.splits, r.flips
+    bare = lp[~np.isin(lp, ring)]  # loop vertices with no surrounding face
     if method == "liepa-fair" and len(P) > nv:
-        P = fair(P, np.vstack([ring, pf]), np.arange(nv, len(P)), operator=fairing, weights=fair_weights)
+        P = fair(P, np.vstack([ring, pf]), np.arange(nv, len(P)), operator=fairing, weights=fair_weights, bare=bare)
         for _ in range(fair_rounds - 1):  # sequential: each round refines the previous round's surface
-            r = refine(P, ring, pf, density=density)
+            s2 = np.concatenate([scale, np.full(len(P) - nv, np.nan)])  # new vertices: the loop's mean
+            r = refine(P, ring, pf, density=density, scale=s2)
             P = fair(r.vertices, np.vstack([ring, r.faces]), np.arange(nv, len(r.vertices)), operator=fairing,
-                     weights=fair_weights)
+                     weights=fair_weights, bare=bare)
             pf, nflip = relax(P, r.faces, ring)
             splits += r.splits
             flips += r.flips + nflip

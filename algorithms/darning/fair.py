@@ -74,13 +74,17 @@ def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> 
 
 
 def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
-         operator: str = "U2", weights: str = "uniform", iterations: int = 2) -> NDArray[np.float64]:
+         operator: str = "U2", weights: str = "uniform", iterations: int = 2,
+         bare: NDArray[np.int64] | None = None) -> NDArray[np.float64]:
     """New positions (V, 3) with the ``free`` vertices moved so that U1 = 0 or U2 = 0 there.
 
     faces must hold every face around the free vertices and, for U2, every face around their
     neighbours (the hole border's outer ring), e.g. the whole mesh.
     operator: "U2"/"bilaplacian" (default) or "U1"/"umbrella".
     weights: "uniform" (the spec's) or "cotan" (recomputed ``iterations`` times).
+    bare: fixed vertices whose own neighbourhood is missing (e.g. a bridge chain whose other side
+        is not filled yet): U1 at such a vertex is meaningless, so the free vertices next to one
+        solve U1 = 0 instead of U2 = 0 (positions only as the boundary condition there).
     """
     if operator not in ORDERS:
         raise ValueError(f"operator must be one of {sorted(ORDERS)}, got {operator!r}")
@@ -100,6 +104,14 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
         L = uniform_laplacian(len(v), faces) if weights == "uniform" else cotan_laplacian(out, faces)
         K = (L @ L if ORDERS[operator] == 2 else L).tocsr()
         rows = K[free]
+        if ORDERS[operator] == 2 and bare is not None and len(bare):
+            near = np.asarray((abs(L[free][:, np.asarray(bare, dtype=np.int64)]) > 0).sum(axis=1)).ravel() > 0
+            if near.any():
+                rows = sp.vstack([rows[np.flatnonzero(~near)], L[free[near]]]).tocsr()
+                order = np.r_[np.flatnonzero(~near), np.flatnonzero(near)]
+                inv = np.empty_like(order)
+                inv[order] = np.arange(len(order))
+                rows = rows[inv]
         rhs = -(rows[:, fixed] @ out[fixed])
         out[free] = splu(rows[:, free].tocsc()).solve(rhs)
     return out
