@@ -1,0 +1,413 @@
+"""The boundary indicator field BIAF (spec/repair.md §4, eqs. 11-16).
+
+An elementary source {O, n_O, tau_O, h_O} acts on {X, n_X} with the force f = delta d h_O Q (11,
+15). Q is linear in n_X, so f = H n_X with the tensor (12)-(14)
+
+    H_O = delta_XO h_O g d s_O^T,   g = q12 (1 + k_i q4) (13),   s_O = tau_O x d,
+
+(the factor (I - d d^T) of (14) drops out because s_O is perpendicular to d), and many sources
+superpose: H(X) = sum_O H_O(X).
+
+Speed: the sum over sources is one fused numba loop per evaluation point (parallel over points),
+so no (N, M) temporaries are made and memory stays O(N + M) whatever the chunk; q4 uses
+s_O . n_O = (tau_O x d) . n_O = -d . b_O, so a pair costs one sqrt, one exp and ~40 flops.
+Pairs whose weight is negligible (q1 < 1e-7 even after free points shorten them as much as they
+can) are skipped before the shielding test, which is what keeps full mode affordable.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from ..boundary import LoopFrame
+from ..params import FieldParams
+from .free_points import FreePoints, grid_args, q2_kernel
+from .shielding import Bvh, segment_blocked
+
+Arr = NDArray[np.float64]
+PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: relative weight below which a Gaussian source is skipped
+NO_GROUP = -2
+SERIAL_BELOW = 16  # fewer points than this: one thread (a tracing step)
+
+
+@dataclass(frozen=True, eq=False)
+class Sources:
+    """M elementary sources (boundary points). group: what a point excludes when it belongs to it
+    (the island, or the loop); loop/pos/loop_len: the loop and position along it (for excluding a
+    neighbourhood of a point along its own loop); vertex: mesh vertex numbers (-1 if none)."""
+
+    points: Arr
+    tangent: Arr
+    normal: Arr
+    outward: Arr
+    charge: Arr
+    vertex: NDArray[np.int64]
+    island: NDArray[np.int64]
+    group: NDArray[np.int64]
+    loop: NDArray[np.int64]
+    pos: NDArray[np.int64]
+    loop_len: NDArray[np.int64]
+
+    def __len__(self) -> int:
+        return int(len(self.points))
+
+    def subset(self, keep: NDArray[np.bool_]) -> Sources:
+        return Sources(*(np.ascontiguousarray(getattr(self, f)[keep]) for f in self.__dataclass_fields__))
+
+
+def sources_from_frames(frames: Sequence[LoopFrame], *, loop_ids: Sequence[int] | None = None,
+                        group: str = "island") -> Sources:
+    """Sources from loop frames (spec §2 data). group: "island" or "loop" (the unit a point excludes)."""
+    ids = list(range(len(frames))) if loop_ids is None else list(loop_ids)
+    if not frames:
+        z3, zi = np.zeros((0, 3)), np.zeros(0, dtype=np.int64)
+        return Sources(z3, z3, z3, z3, np.zeros(0), zi, zi, zi, zi, zi, zi)
+    cat = np.concatenate
+    isl = cat([np.full(len(f.vertices), f.island) for f in frames]).astype(np.int64)
+    loop = cat([np.full(len(f.vertices), k) for k, f in zip(ids, frames)]).astype(np.int64)
+    return Sources(
+        np.ascontiguousarray(cat([f.points for f in frames])), np.ascontiguousarray(cat([f.tangent for f in frames])),
+        np.ascontiguousarray(cat([f.normal for f in frames])), np.ascontiguousarray(cat([f.outward for f in frames])),
+        cat([f.charge for f in frames]).astype(np.float64), cat([f.vertices for f in frames]).astype(np.int64),
+        isl, isl.copy() if group == "island" else loop.copy(), loop,
+        cat([np.arange(len(f.vertices)) for f in frames]).astype(np.int64),
+        cat([np.full(len(f.vertices), len(f.vertices)) for f in frames]).astype(np.int64))
+
+
+@numba.njit(cache=True, fastmath=True)
+def _q1(l2, lc2, kernel):
+    if kernel == 0:
+        return np.exp(-l2 / lc2)
+    return 1.0 / (1.0 + l2 / lc2)
+
+
+@numba.njit(cache=True, fastmath=True)
+def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                 out_h, out_near, out_dist):
+    """Light mode (M1) at point i: H, no shielding, q12 = q1(L). Also the nearest source."""
+    m = o.shape[0]
+    x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+    h00 = h01 = h02 = h10 = h11 = h12 = h20 = h21 = h22 = 0.0
+    best = 1e300
+    bj = -1
+    for j in range(m):
+        if sgrp[j] == xgrp[i]:
+            continue
+        if xwin[i] >= 0 and sloop[j] == xloop[i]:
+            dp = abs(spos[j] - xpos[i])
+            dp = min(dp, slen[j] - dp)
+            if dp <= xwin[i]:
+                continue
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
+        if l2 < best:
+            best = l2
+            bj = j
+        if l2 < 1e-300:
+            continue
+        il = 1.0 / np.sqrt(l2)
+        d0, d1, d2 = r0 * il, r1 * il, r2 * il  # (6)
+        t0, t1, t2 = tau[j, 0], tau[j, 1], tau[j, 2]
+        s0 = t1 * d2 - t2 * d1  # s_O = tau_O x d
+        s1 = t2 * d0 - t0 * d2
+        s2 = t0 * d1 - t1 * d0
+        q4 = 0.5 * (1.0 - (d0 * b[j, 0] + d1 * b[j, 1] + d2 * b[j, 2]))  # (7): s_O . n_O = -d . b_O
+        w = h[j] * _q1(l2, lc2, kernel) * (1.0 + ki * q4)  # h_O g, (13) with q12 = q1(L)
+        wd0, wd1, wd2 = w * d0, w * d1, w * d2
+        h00 += wd0 * s0
+        h01 += wd0 * s1
+        h02 += wd0 * s2
+        h10 += wd1 * s0
+        h11 += wd1 * s1
+        h12 += wd1 * s2
+        h20 += wd2 * s0
+        h21 += wd2 * s1
+        h22 += wd2 * s2
+    out_h[i, 0], out_h[i, 1], out_h[i, 2] = h00, h01, h02
+    out_h[i, 3], out_h[i, 4], out_h[i, 5] = h10, h11, h12
+    out_h[i, 6], out_h[i, 7], out_h[i, 8] = h20, h21, h22
+    out_near[i] = bj
+    out_dist[i] = np.sqrt(best) if bj >= 0 else np.inf
+
+
+@numba.njit(cache=True, parallel=True)
+def _field_light(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                 out_h, out_near, out_dist):
+    """Light mode over all points, parallel (threads over points)."""
+    for i in numba.prange(x.shape[0]):
+        _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                     out_h, out_near, out_dist)
+
+
+@numba.njit(cache=True)
+def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                        out_h, out_near, out_dist):
+    """Light mode, one thread: for the few points of a tracing step (no thread start-up cost)."""
+    for i in range(x.shape[0]):
+        _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                     out_h, out_near, out_dist)
+
+
+@numba.njit(cache=True)
+def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2, shrink2,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                out_h, out_near, out_dist, out_pairs):
+    """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8)."""
+    m = o.shape[0]
+    xi = x[i]
+    acc = np.zeros(9)
+    best = 1e300
+    bj = -1
+    pairs = 0
+    for j in range(m):  # pass 1: the nearest admissible source
+        if sgrp[j] == xgrp[i]:
+            continue
+        if xwin[i] >= 0 and sloop[j] == xloop[i]:
+            dp = abs(spos[j] - xpos[i])
+            dp = min(dp, slen[j] - dp)
+            if dp <= xwin[i]:
+                continue
+        r = o[j] - xi
+        l2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+        if l2 < best:
+            best = l2
+            bj = j
+    # relative pruning: skip a source whose weight is below ~1e-7 of the nearest one's
+    # ((L * shrink)^2 - best > prune2 with shrink = 1 / (1 + max sum G): q2 >= L * shrink)
+    for j in range(m):  # pass 2: the field
+        if sgrp[j] == xgrp[i]:
+            continue
+        if xwin[i] >= 0 and sloop[j] == xloop[i]:
+            dp = abs(spos[j] - xpos[i])
+            dp = min(dp, slen[j] - dp)
+            if dp <= xwin[i]:
+                continue
+        r = o[j] - xi
+        l2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+        if l2 * shrink2 - best > prune2 or l2 < 1e-300:
+            continue
+        pairs += 1
+        if shield and segment_blocked(xi, o[j], xv[i], ov[j], node_min, node_max, node_left, node_right,
+                                      node_start, node_count, tri, tri_vertex, scale):
+            continue  # (15) delta_XO = 0
+        length = np.sqrt(l2)
+        d = r / length  # (6)
+        s = np.cross(tau[j], d)  # s_O = tau_O x d
+        q4 = 0.5 * (1.0 - d @ b[j])  # (7)
+        if use_fp:
+            q2 = q2_kernel(xi, o[j], length, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2,
+                           g_kernel)  # (4)
+            q12 = _q1(q2 * q2, lc2, kernel)  # (8)
+        else:
+            q12 = _q1(l2, lc2, kernel)
+        w = h[j] * q12 * (1.0 + ki * q4)  # (13)
+        for a in range(3):
+            for c in range(3):
+                acc[3 * a + c] += w * d[a] * s[c]  # (12)-(14): h g d s^T
+    for k in range(9):
+        out_h[i, k] = acc[k]
+    out_near[i] = bj
+    out_dist[i] = np.sqrt(best) if bj >= 0 else np.inf
+    out_pairs[i] = pairs
+
+
+@numba.njit(cache=True, parallel=True)
+def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2, shrink2,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                out_h, out_near, out_dist, out_pairs):
+    for i in numba.prange(x.shape[0]):
+        _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2, shrink2,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                out_h, out_near, out_dist, out_pairs)
+
+
+@numba.njit(cache=True)
+def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2, shrink2,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                out_h, out_near, out_dist, out_pairs):
+    for i in range(x.shape[0]):
+        _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
+                lc2, ki, kernel, prune2, shrink2,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                out_h, out_near, out_dist, out_pairs)
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """The field at N points: H (N, 3, 3); nearest (N,) index of the nearest admissible source
+    (-1 if none) and its distance; pairs: point x source pairs evaluated (after pruning)."""
+
+    H: Arr
+    nearest: NDArray[np.int64]
+    distance: Arr
+    pairs: int
+
+
+def top_normal(H: Arr, t: Arr, hint: Arr | None = None) -> tuple[Arr, Arr]:
+    """(16a)/(16b): n maximising |H n| with |n| = 1 and n . t = 0: the eigenvector of the largest
+    eigenvalue of P H^T H P, P = I - t t^T. Batched: H (N, 3, 3), t (N, 3), hint (N, 3) or None.
+
+    Sign rule (spec choice): n . hint > 0 (hint = n_O at an origin, the previous normal along a
+    line). Returns (n (N, 3), |H n| (N,)).
+    """
+    H = np.asarray(H, dtype=np.float64).reshape(-1, 3, 3)
+    t = np.asarray(t, dtype=np.float64).reshape(-1, 3)
+    tn = np.linalg.norm(t, axis=1, keepdims=True)
+    t = np.divide(t, tn, out=np.zeros_like(t), where=tn > 0)
+    P = np.eye(3)[None] - t[:, :, None] * t[:, None, :]
+    HP = H @ P
+    M = np.swapaxes(HP, 1, 2) @ HP
+    _, vec = np.linalg.eigh(M)
+    n = vec[:, :, 2]
+    n = n - (n * t).sum(axis=1, keepdims=True) * t  # exact orthogonality against round-off
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    if hint is not None:
+        hint = np.asarray(hint, dtype=np.float64).reshape(-1, 3)
+        flip = (n * hint).sum(axis=1) < 0
+        n[flip] *= -1
+    f = np.einsum("nij,nj->ni", H, n)
+    return n, np.linalg.norm(f, axis=1)
+
+
+@numba.njit(cache=True)
+def _normal_one(hm, t, hint):
+    """(16b) for one point: top eigenvector of P H^T H P (P = I - t t^T), sign n . hint >= 0.
+    Returns (n, H n)."""
+    tn = np.sqrt(t @ t)
+    tt = t / tn if tn > 0 else t * 0.0
+    P = np.eye(3) - np.outer(tt, tt)
+    HP = hm @ P
+    w, v = np.linalg.eigh(HP.T @ HP)
+    n = v[:, 2].copy()
+    n = n - (n @ tt) * tt
+    nn = np.sqrt(n @ n)
+    if nn > 0:
+        n = n / nn
+    if n @ hint < 0:
+        n = -n
+    return n, hm @ n
+
+
+class IndicatorField:
+    """BIAF over a set of sources (the field of §4) with the parameters' mode.
+
+    lc: L_c (already resolved). mesh_bvh: the island triangles for shielding (full mode).
+    free: the free points (full mode). Evaluations go through `evaluate` in chunks of ``chunk``
+    points (the kernels allocate nothing per pair, so memory is O(chunk + M)).
+    """
+
+    def __init__(self, sources: Sources, params: FieldParams, lc: float, *, bvh: Bvh | None = None,
+                 free: FreePoints | None = None, chunk: int = 4096) -> None:
+        if not lc > 0:
+            raise ValueError(f"L_c must be positive, not {lc}")
+        self.sources = sources
+        self.params = params
+        self.lc = float(lc)
+        self.bvh = bvh
+        self.free = free if (free is not None and len(free.points) and params.use_free_points) else None
+        self.shield = bool(params.shielding and bvh is not None and bvh.n_triangles)
+        self.chunk = int(chunk)
+        self.kernel = 0 if params.q1_kernel == "gauss" else 1
+        gmax = self.free.g_max if self.free is not None else 0.0
+        # full mode: a Gaussian source is skipped when its weight is below exp(-16) of the nearest
+        # one's even after free points shorten it as much as they can (q2 >= L / (1 + max sum G));
+        # the heavy-tailed kernel is never pruned.
+        self.prune = PRUNE_GAUSS * self.lc if self.kernel == 0 else np.inf
+        self.shrink = 1.0 / (1.0 + gmax)
+
+    def sample_one(self, x: Arr, tangent: Arr, hint: Arr) -> tuple[Arr, Arr, float]:
+        """One point, no exclusions (a tracing step): (n, F = H n, |F|) with n from (16b)."""
+        ev = self.evaluate(np.asarray(x, dtype=np.float64).reshape(1, 3))
+        n, f = _normal_one(ev.H[0], np.asarray(tangent, dtype=np.float64), np.asarray(hint, dtype=np.float64))
+        return n, f, float(np.sqrt(f @ f))
+
+    @property
+    def full(self) -> bool:
+        return self.params.mode == "full"
+
+    def evaluate(self, x: Arr, *, x_vertex: NDArray[np.int64] | None = None, x_group: NDArray[np.int64] | None = None,
+                 x_loop: NDArray[np.int64] | None = None, x_pos: NDArray[np.int64] | None = None,
+                 x_window: NDArray[np.int64] | None = None) -> Evaluation:
+        """H(X) at points x (N, 3). x_group: sources of that group are excluded for each point;
+        x_loop / x_pos / x_window: sources of the same loop within x_window positions of x_pos are
+        excluded (-1 = no window). x_vertex: the mesh vertex each point is (shielding ignores its
+        triangles; -1 for a free point)."""
+        x = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(-1, 3))
+        n = len(x)
+
+        def ints(a, fill):
+            return np.full(n, fill, dtype=np.int64) if a is None else np.ascontiguousarray(a, dtype=np.int64)
+
+        xv, xg = ints(x_vertex, -1), ints(x_group, NO_GROUP)
+        xl, xp, xw = ints(x_loop, -1), ints(x_pos, 0), ints(x_window, -1)
+        S = self.sources
+        H = np.zeros((n, 9))
+        near = np.full(n, -1, dtype=np.int64)
+        dist = np.full(n, np.inf)
+        pairs = 0
+        lc2 = self.lc * self.lc
+        prune2 = self.prune * self.prune if np.isfinite(self.prune) else np.inf
+        p = self.params
+        if n == 0 or len(S) == 0:
+            return Evaluation(H.reshape(n, 3, 3), near, dist, 0)
+        for a in range(0, n, self.chunk):
+            sl = slice(a, min(a + self.chunk, n))
+            if not self.full:
+                kern = _field_light if sl.stop - sl.start >= SERIAL_BELOW else _field_light_serial
+                kern(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
+                             S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2, H[sl], near[sl], dist[sl])
+                pairs += (sl.stop - sl.start) * len(S)
+            else:
+                bvh = self.bvh
+                barr = bvh.arrays() if bvh is not None else _EMPTY_BVH
+                garr = grid_args(self.free) if self.free is not None else _EMPTY_GRID
+                cnt = np.zeros(sl.stop - sl.start, dtype=np.int64)
+                kern = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
+                kern(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
+                            S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
+                     self.shrink ** 2,
+                            self.shield, *barr, bvh.scale if bvh is not None else 1.0,
+                            self.free is not None, *garr, H[sl], near[sl], dist[sl], cnt)
+                pairs += int(cnt.sum())
+        return Evaluation(H.reshape(n, 3, 3), near, dist, pairs)
+
+
+_EMPTY_BVH = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
+              np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
+              np.zeros((0, 3), dtype=np.int64))
+_EMPTY_GRID = (np.zeros(3), 1.0, np.ones(3, dtype=np.int64), np.zeros(2, dtype=np.int64), np.zeros((0, 3)), 0.0, 1.0,
+               0.0, 0)
+
+
+def direct_tensor(x: Arr, sources: Sources, params: FieldParams, lc: float) -> Arr:
+    """Reference H(X) by a plain loop over sources with quality.basic_task (light mode, for tests)."""
+    from .quality import basic_task
+
+    H = np.zeros((3, 3))
+    for j in range(len(sources)):
+        o = sources.points[j]
+        if np.linalg.norm(o - x) == 0:
+            continue
+        # H_O = h g d s_O^T: read it off column by column with n_X = e_k, since f = d h Q(n_X)
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1.0
+            f = basic_task(x, e, o, sources.tangent[j], sources.normal[j], params, lc)
+            H[:, k] += f["d"] * sources.charge[j] * f["Q10"]  # (11) f = d h Q
+    return H
