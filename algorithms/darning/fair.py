@@ -127,8 +127,23 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
             if (order < k).any():
                 rows = _mixed_rows(powers, free, order)
         rhs = -(rows[:, fixed] @ out[fixed])
-        out[free] = splu(rows[:, free].tocsc()).solve(rhs)
+        out[free] = _solve(rows[:, free].tocsr(), rhs, out[free])
     return out
+
+
+def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A x = rhs by sparse LU. A free vertex whose row vanished (all its faces degenerate) keeps its
+    position; a system that is still singular (a free region with no path to a fixed vertex) is
+    solved with a tiny diagonal shift towards the current positions."""
+    zero = np.asarray(abs(A).sum(axis=1)).ravel() == 0
+    if zero.any():
+        A = (A + sp.diags(zero.astype(np.float64))).tocsr()
+        rhs = np.where(zero[:, None], x0, rhs)
+    try:
+        return splu(A.tocsc()).solve(rhs)
+    except RuntimeError:  # exactly singular
+        eps = 1e-9 * float(abs(A).max())
+        return splu((A + eps * sp.identity(A.shape[0])).tocsc()).solve(rhs + eps * x0)
 
 
 def _mixed_rows(powers: list[sp.csr_matrix], free: NDArray[np.int64], order: NDArray[np.int64]) -> sp.csr_matrix:
