@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .boundary import LoopFrame
+from .boundary import LoopFrame, frame_of
 
 
 @dataclass(frozen=True)
@@ -130,21 +130,7 @@ def polygon_frame(vertices: NDArray[np.float64], normals: NDArray[np.float64], p
     """Boundary frame (spec §2) of a hole polygon walked with the hole on its right.
 
     The walk has the surface on its left like a boundary loop in positive direction, so the
-    loop formulas apply unchanged: tau from the neighbouring edges, n the surface normal at the
-    vertex (for chain vertices of bridges, the force line's normal), b = tau x n.
+    loop formulas apply unchanged (for chain vertices of bridges, n is the force line's normal).
     """
     poly = np.asarray(polygon, dtype=np.int64)
-    p = vertices[poly]
-    e_out = np.roll(p, -1, axis=0) - p
-    e_in = p - np.roll(p, 1, axis=0)
-
-    def unit(a):
-        ln = np.linalg.norm(a, axis=-1, keepdims=True)
-        return np.divide(a, ln, out=np.zeros_like(a), where=ln > 0)
-
-    tau = unit(unit(e_in) + unit(e_out))
-    nrm = unit(normals[poly])
-    b = unit(np.cross(tau, nrm))
-    h = (0.5 * (np.linalg.norm(e_in, axis=1) + np.linalg.norm(e_out, axis=1)) if charge == "length"
-         else np.ones(len(poly)))
-    return LoopFrame(poly, p, tau, nrm, b, h, island)
+    return frame_of(vertices[poly], normals[poly], poly, island=island, charge=charge)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,7 +46,7 @@ class RepairParams:
     max_split_depth: int = 6  # recursion limit of hole splitting
     spacing_factor: float = 1.0  # bridge chain spacing = factor x mean boundary edge length
     clearance_factor: float = 1.5  # bridges keep this many chain spacings apart
-    neighbourhood_factor: float = 0.35  # same-neighbourhood radius = factor x L_c
+    neighbourhood_factor: float = 1.0  # same-neighbourhood radius = factor x L_c
 
     def __post_init__(self) -> None:
         if self.tunnels not in TUNNELS:
@@ -113,6 +113,8 @@ class RepairResult:
     new_faces: NDArray[np.int64]  # indices (into mesh.faces) of the faces the repair added
     timings: dict[str, float]
     lc: float = 0.0
+    fairing: str = "none"  # the final fairing actually used
+    tunnel_note: str = ""  # what the tunnel rule decided for each pair of loops
 
     def report(self) -> dict:
         topo = topology(self.mesh.faces)
@@ -152,6 +154,8 @@ class RepairResult:
                        "genus": topo.genus, "boundary_loops": topo.boundary_loops,
                        "faces": self.mesh.n_faces, "vertices": self.mesh.n_vertices},
             "lc": self.lc,
+            "fairing": self.fairing,
+            "tunnels": self.tunnel_note,
             "timings": self.timings,
         }
 
@@ -227,60 +231,88 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     bridges: list[Bridge] = []
     chains: list[NDArray[np.int64]] = []
     lc_used = 0.0
+    tunnel_note = ""
 
-    # 1. connect islands (ICM3 -> ICM2)
+    lc_for_rules = spacing * 10
+    rules = ConflictRules(clearance=params.clearance_factor * spacing,
+                          neighbourhood=params.neighbourhood_factor * lc_for_rules, endpoint_gap=2)
+    state = GraphState(work.V(), loop_of, [len(lp) for lp in loops], rules)
+    pending: list[tuple[int, Bridge, ForceLine, str]] = []
+    n_arrived = 0
+
+    def as_bridges(cands: list[ForceLine], kind: str) -> list[tuple[Bridge, ForceLine]]:
+        """Arrived lines as bridges (chains resampled at the spacing), best quality first."""
+        out = []
+        line_index = {id(ln): k for k, ln in enumerate(lines)}
+        for ln in sorted(cands, key=lambda x: -x.quality):
+            if not ln.arrived or ln.start_vertex not in loop_of or ln.end_vertex not in loop_of:
+                continue
+            poly = np.vstack([mesh.vertices[ln.start_vertex], ln.points[1:-1], mesh.vertices[ln.end_vertex]])
+            out.append((Bridge(int(ln.start_vertex), int(ln.end_vertex), resample_chain(poly, spacing),
+                               float(ln.quality), kind, line_index.get(id(ln), -1)), ln))
+        return out
+
+    def keep(b: Bridge, ln: ForceLine | None) -> None:
+        state.add(b)
+        bridges.append(b)
+        chains.append(work.add_vertices(b.points, _chain_normals(ln, b.points)))
+
+    # 1. connect islands (ICM3 -> ICM2): conflicts resolved best quality first
     t0 = time.perf_counter()
-    candidates: list[tuple[ForceLine, str]] = []
     if n_isl > 1:
         step(0.05, "tracing force lines between islands")
         found = rf.island_lines(model, params.field, cancel=cancel,
                                 progress=(lambda f, m: step(0.05 + 0.3 * f, m)) if progress else None)
         lc_used = found.lc
         lines += list(found.all_lines)
-        candidates += [(ln, "island") for ln in found.lines]
+        state.rules = rules = replace(rules, neighbourhood=params.neighbourhood_factor * lc_used)
+        for b, ln in as_bridges(list(found.lines), "island"):
+            n_arrived += 1
+            why = state.conflict(b)
+            if why is None:
+                keep(b, ln)
+            else:
+                rejected.append((b.candidate, why))
+                pending.append((b.candidate, b, ln, why))
     timings["bridges"] = time.perf_counter() - t0
 
-    # 2. tunnels: non-trivial boundaries of one island joined by the best force lines
+    # 2. tunnels: among the non-trivial boundaries no island bridge reached (loops of islands
+    #    with two or more loops), joined by the best force lines; a tunnel needs two bridges
     t0 = time.perf_counter()
     if params.tunnels != "off":
         step(0.35, "looking for lost handles")
-        multi = [i.index for i in summary.islands if len(i.loops) >= 2]
-        if multi:
-            tl = rf.tunnel_lines(model, frames, [k for k, f in enumerate(frames) if f.island in multi],
-                                 params.field, force=params.tunnels == "on", cancel=cancel)
+        touched = {loop_of[v][0] for b in bridges for v in (b.start, b.end)}
+        multi = {i.index for i in summary.islands if len(i.loops) >= 2}
+        free_loops = [k for k, f in enumerate(frames) if f.island in multi and k not in touched]
+        if len(free_loops) >= 2:
+            tl = rf.tunnel_lines(model, frames, free_loops, params.field, force=params.tunnels == "on",
+                                 cancel=cancel)
             lc_used = lc_used or tl.lc
             lines += list(tl.all_lines)
-            candidates += [(ln, "tunnel") for ln in tl.lines]
+            tunnel_note = tl.note
+            trial = GraphState(state.vertices, loop_of, state.loop_sizes,
+                               replace(rules, neighbourhood=params.neighbourhood_factor * (tl.lc or lc_for_rules)))
+            for k in state.kept:
+                trial.add(k)
+            by_pair: dict[tuple[int, int], list[tuple[Bridge, ForceLine]]] = {}
+            for b, ln in as_bridges(list(tl.lines), "tunnel"):
+                n_arrived += 1
+                why = trial.conflict(b)
+                if why is None:
+                    trial.add(b)
+                    pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
+                    by_pair.setdefault(pair, []).append((b, ln))  # type: ignore[arg-type]
+                else:
+                    rejected.append((b.candidate, why))
+            for pair, kept_pair in by_pair.items():
+                if len(kept_pair) >= 2:
+                    for b, ln in kept_pair:
+                        keep(b, ln)
+                else:
+                    rejected += [(b.candidate, f"tunnel between loops {pair} left with one bridge")
+                                 for b, _ in kept_pair]
     timings["tunnels"] = time.perf_counter() - t0
-
-    # conflict resolution: best quality first
     t0 = time.perf_counter()
-    lc_for_rules = lc_used or spacing * 10
-    rules = ConflictRules(clearance=params.clearance_factor * spacing,
-                          neighbourhood=params.neighbourhood_factor * lc_for_rules, endpoint_gap=2)
-    state = GraphState(work.V(), loop_of, [len(lp) for lp in loops], rules)
-    order = sorted(range(len(candidates)), key=lambda i: -candidates[i][0].quality)
-    cand_bridges: list[tuple[int, Bridge, ForceLine]] = []
-    line_index = {id(ln): k for k, ln in enumerate(lines)}
-    for i in order:
-        ln, kind = candidates[i]
-        if not ln.arrived or ln.end_vertex < 0 or ln.start_vertex not in loop_of or ln.end_vertex not in loop_of:
-            continue
-        poly = np.vstack([mesh.vertices[ln.start_vertex], ln.points[1:-1], mesh.vertices[ln.end_vertex]])
-        b = Bridge(int(ln.start_vertex), int(ln.end_vertex), resample_chain(poly, spacing), float(ln.quality),
-                   kind, line_index.get(id(ln), -1))
-        cand_bridges.append((b.candidate, b, ln))
-    pending = []
-    for idx, b, ln in cand_bridges:
-        why = state.conflict(b)
-        if why is None:
-            state.add(b)
-            ids = work.add_vertices(b.points, _chain_normals(ln, b.points))
-            bridges.append(b)
-            chains.append(ids)
-        else:
-            rejected.append((idx, why))
-            pending.append((idx, b, ln, why))
     holes = walk_holes(loops, bridges, chains)
     # a walk that uses a bridge twice is not a disk: add the next best candidates on that walk
     for _ in range(len(pending)):
@@ -308,7 +340,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         holes = walk_holes(loops, bridges, chains)
     timings["graph"] = time.perf_counter() - t0
     V = work.V()
-    stages.append(Stage("bridges", f"{len(bridges)} bridges kept of {len(cand_bridges)} that arrived",
+    stages.append(Stage("bridges", f"{len(bridges)} bridges kept of {n_arrived} lines that arrived",
                         holes=tuple(f.points for f in frames),
                         bridges=tuple(b.polyline(V) for b in bridges)))
     stages.append(Stage("holes", f"{len(holes)} holes bounded by loops and bridges",
@@ -339,18 +371,32 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             final.append(poly)
             continue
         any_complex = True
-        frame = polygon_frame(V, N, poly, charge=params.field.charge)
-        split = rf.split_line(model, frame, params.field, cancel=cancel)
-        if split is None:
-            records.append(HoleRecord(poly, verdict, origin, -1, "no force line splits it"))
-            final.append(poly)
-            continue
-        line, i, j = split
-        lines.append(line)
-        pl = np.vstack([V[poly[i]], line.points[1:-1], V[poly[j]]])
-        b = Bridge(int(poly[i]), int(poly[j]), resample_chain(pl, spacing), float(line.quality), "split",
-                   len(lines) - 1)
-        ids = work.add_vertices(b.points, _chain_normals(line, b.points))
+        line = None
+        if len(set(poly)) != len(poly):
+            # not a disk: join its two sides (the spec adds the next best bridge)
+            sb = _straight_bridge(V, N, poly, lc_used or spacing * 10, params.field.ki)
+            if sb is None:
+                records.append(HoleRecord(poly, verdict, origin, -1, "not a disk and no bridge joins its sides"))
+                final.append(poly)
+                continue
+            i, j, q = sb
+            pl = np.vstack([V[poly[i]], V[poly[j]]])
+            b = Bridge(int(poly[i]), int(poly[j]), resample_chain(pl, spacing), q, "island")
+            chain_normals = np.repeat(((N[poly[i]] + N[poly[j]]) / 2)[None], len(b.points), axis=0)
+        else:
+            frame = polygon_frame(V, N, poly, charge=params.field.charge)
+            split = rf.split_line(model, frame, params.field, cancel=cancel)
+            if split is None:
+                records.append(HoleRecord(poly, verdict, origin, -1, "no force line splits it"))
+                final.append(poly)
+                continue
+            line, i, j = split
+            lines.append(line)
+            pl = np.vstack([V[poly[i]], line.points[1:-1], V[poly[j]]])
+            b = Bridge(int(poly[i]), int(poly[j]), resample_chain(pl, spacing), float(line.quality), "split",
+                       len(lines) - 1)
+            chain_normals = _chain_normals(line, b.points)
+        ids = work.add_vertices(b.points, chain_normals)
         bridges.append(b)
         records.append(HoleRecord(poly, verdict, origin, len(bridges) - 1))
         a, c = split_polygon(poly, i, j, ids)
@@ -363,21 +409,28 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                         holes=tuple(V[list(p)] for p in final), bridges=tuple(b.polyline(V) for b in bridges)))
 
     t0 = time.perf_counter()
+    timings_note: dict[str, str] = {}
     n_before = len(work.F())
     n_input = model.mesh.n_vertices
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
         V, F = work.V(), work.F()
-        patch = darn(V, F, np.asarray(poly, dtype=np.int64), method=params.darning, weight=params.weight)
-        work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
-        work.faces.append(np.asarray(patch.faces, dtype=np.int64))
+        # darn on the neighbourhood of the hole only (three rings of faces, compact indices),
+        # so the cost of a hole does not grow with the size of the intact surface (spec (17))
+        sub_v, sub_f, glob = _neighbourhood(V, F, poly, rings=3)
+        local = {int(g): k for k, g in enumerate(glob)}
+        patch = darn(sub_v, sub_f, np.asarray([local[p] for p in poly], dtype=np.int64),
+                     method=params.darning, weight=params.weight)
+        ids = work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
+        to_global = np.concatenate([glob, ids])
+        work.faces.append(to_global[np.asarray(patch.faces, dtype=np.int64)])
     V, F = work.V(), work.F()
     if params.darning == "liepa-fair" and len(V) > n_input:
         # fair every new vertex together (patch interiors and bridge chains), the input fixed:
         # the force lines chose the topology; the final shape is the smoothest continuation
-        from .darning.fair import fair
 
-        V = fair(V, F, np.arange(n_input, len(V)), operator=params.fairing, weights="cotan")
+        V, fairing_used = _fair_new(V, F, n_input, params.fairing)
+        timings_note["fairing"] = fairing_used
     timings["darn"] = time.perf_counter() - t0
     new_faces = np.arange(n_before, len(F))
     stages.append(Stage("darned", f"{len(final)} holes darned with {params.darning}: {len(F) - n_before} new faces",
@@ -390,7 +443,89 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     timings["total"] = time.perf_counter() - t_all
     step(1.0, "repaired")
     return RepairResult(out, model, params, class_found, tuple(bridges), tuple(lines), tuple(rejected),
-                        tuple(records), tuple(stages), new_faces, timings, lc_used)
+                        tuple(records), tuple(stages), new_faces, timings, lc_used,
+                        timings_note.get("fairing", "none"), tunnel_note)
+
+
+def _neighbourhood(V: NDArray[np.float64], F: NDArray[np.int64], poly: tuple[int, ...], *,
+                   rings: int) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+    """Faces within ``rings`` rings of the polygon's vertices, with compact vertex numbers.
+
+    Returns (vertices, faces, global index of each local vertex); the polygon's vertices are
+    always included, even where no face touches them yet (bridge chains).
+    """
+    near = np.zeros(len(V), dtype=bool)
+    near[list(poly)] = True
+    fmask = np.zeros(len(F), dtype=bool)
+    for _ in range(rings):  # each ring: the faces touching the vertices reached so far
+        fmask = near[F].any(axis=1)
+        near[F[fmask].ravel()] = True
+    glob = np.flatnonzero(near)
+    remap = np.full(len(V), -1, dtype=np.int64)
+    remap[glob] = np.arange(len(glob))
+    return V[glob], remap[F[fmask]], glob
+
+
+def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:
+    """The two sides of a walk that passes some vertex twice: positions between the two passes,
+    and the rest; vertices walked twice (the doubly used bridge) belong to neither."""
+    seen: dict[int, int] = {}
+    for k, v in enumerate(polygon):
+        if v in seen:
+            p, q = seen[v], k
+            break
+        seen[v] = k
+    else:
+        return None
+    count: dict[int, int] = {}
+    for v in polygon:
+        count[v] = count.get(v, 0) + 1
+    n = len(polygon)
+    s1 = [k for k in range(p + 1, q) if count[polygon[k]] == 1]
+    s2 = [k % n for k in range(q + 1, p + n) if count[polygon[k % n]] == 1]
+    return (s1, s2) if s1 and s2 else None
+
+
+def _straight_bridge(V: NDArray[np.float64], N: NDArray[np.float64], polygon: tuple[int, ...],
+                     lc: float, ki: float) -> tuple[int, int, float] | None:
+    """The best straight bridge between the two sides of a non-disk walk (positions i, j and its
+    quality), scored by the straight-bridge quality of spec §3 with n_X = the surface normal:
+    q_T (2) > 0 required, Q ~ q_T q1(L) (1 + k_i q4) (9)."""
+    sides = _sides(polygon)
+    if sides is None:
+        return None
+    s1, s2 = (np.asarray(x) for x in sides)
+    fr = polygon_frame(V, N, polygon)
+    a, b = fr.points[s1][:, None, :], fr.points[s2][None, :, :]
+    d = b - a
+    L = np.linalg.norm(d, axis=2)
+    u = d / np.maximum(L, 1e-300)[..., None]
+    sa = np.cross(u, fr.tangent[s1][:, None, :])  # (1a)
+    sb = np.cross(-u, fr.tangent[s2][None, :, :])  # (1b)
+    qT = np.einsum("ijk,ijk->ij", sa, sb)  # (2)
+    q4 = (1 + np.einsum("ijk,ijk->ij", sa, fr.normal[s1][:, None, :])) / 2  # (7) at the start
+    Q = np.where(qT > 0, qT * np.exp(-(L / max(lc, 1e-12)) ** 2) * (1 + ki * q4), -np.inf)  # (3), (9)
+    i, j = np.unravel_index(int(np.argmax(Q)), Q.shape)
+    if not np.isfinite(Q[i, j]):
+        i, j = np.unravel_index(int(np.argmin(L)), L.shape)  # no compatible pair: the shortest
+    return int(s1[i]), int(s2[j]), float(Q[i, j]) if np.isfinite(Q[i, j]) else 0.0
+
+
+def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operator: str) -> tuple[NDArray, str]:
+    """Fair the new vertices with the input fixed; fall back to lower orders / uniform weights
+    when the system is singular (a free region without enough fixed rings around it)."""
+    from .darning.fair import fair
+
+    free = np.arange(n_input, len(V))
+    tries = [(operator, "cotan"), ("U2", "cotan"), ("U2", "uniform"), ("U1", "uniform")]
+    for op, w in tries[tries.index((operator, "cotan")) if (operator, "cotan") in tries else 0:]:
+        try:
+            out = fair(V, F, free, operator=op, weights=w)
+        except (RuntimeError, ValueError, np.linalg.LinAlgError):
+            continue
+        if np.all(np.isfinite(out)):
+            return out, f"{op} {w}"
+    return V, "none (every fairing system was singular)"
 
 
 def _class_found(n_islands: int, n_loops: int, tunnel: bool) -> str:

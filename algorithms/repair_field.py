@@ -11,23 +11,24 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
 from .boundary import LoopFrame
 from .bridges import (
     FieldContext,
     _edges,
     attraction_index,
-    field_context,
+    auto_lc,
     find_candidate_bridges,
     local_maxima,
     loop_radius,
     trace_in_loop,
 )
 from .field.free_points import free_points
-from .field.indicator import sources_from_frames
+from .field.indicator import IndicatorField, sources_from_frames, top_normal
+from .field.protocol import Biaf
 from .field.shielding import mesh_bvh
-from .mesh import Icadm, Mesh
+from .force_lines import make_targets, trace
+from .mesh import Icadm
 from .params import FieldParams
 from .records import Cancelled, ForceLine
 
@@ -48,85 +49,88 @@ def island_lines(model: Icadm, params: FieldParams, *, progress: Callable[[float
     return LineSet(bs.lc, tuple(ln for ln in lines if ln.arrived), lines)
 
 
-def _own_quality(ctx: FieldContext, frame: LoopFrame, starts: NDArray[np.int64], params: FieldParams,
-                 cancel: Callable[[], bool] | None) -> tuple[float, list[ForceLine]]:
-    """Best quality of the lines that cross the loop's own hole from the given start points."""
-    best, out = 0.0, []
-    for i in starts:
-        if cancel is not None and cancel():
-            raise Cancelled()
-        ln = trace_in_loop(ctx, frame, int(i), replace(params, lc=None, step=None), lc=loop_radius(frame))
-        out.append(ln)
-        if ln.arrived:
-            best = max(best, ln.quality)
-    return best, out
-
-
 def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], params: FieldParams, *,
-                 force: bool = False, cancel: Callable[[], bool] | None = None, starts_per_loop: int = 3) -> LineSet:
-    """Step 2 (ICMT): lines between the loops of each island that has two or more loops.
+                 force: bool = False, cancel: Callable[[], bool] | None = None, starts_per_loop: int = 6,
+                 exclude_fraction: float = 0.2) -> LineSet:
+    """Step 2 (ICMT): force lines among the given non-trivial boundaries.
 
-    Two loops are joined by a tunnel when two or more force lines connect them and each of those
-    lines has a quality above every other line of those two loops: the lines to other loops and
-    the lines across each loop's own hole (which is what a loop that should simply be capped
-    prefers). ``force`` (tunnels "on") joins the best connected pair without that comparison.
+    Sources: all the given loops, the start's own loop included except a neighbourhood of the
+    start (exclude_fraction of the loop on each side), so that a line may cross its own hole
+    (the loop should simply be capped) or reach another loop (a lost handle): both compete in
+    one field. L_c for lines from loop k: max(its mean radius, the mean distance between the
+    boundaries), spec §6's two characteristic values. Start points: the local maxima of Omega,
+    completed by evenly spaced points, ``starts_per_loop`` per loop.
+
+    Loops i and j are joined by a tunnel when two or more lines connect them and, from each of the
+    two loops, every line to the other one has a quality above every other line from that loop.
+    ``force`` (tunnels "on") accepts the best connected pair without that comparison.
     """
-    by_island: dict[int, list[int]] = {}
-    for k in loop_ids:
-        by_island.setdefault(frames[k].island, []).append(k)
-    vert_loop = {int(v): k for k, f in enumerate(frames) for v in f.vertices}
-    from .topology import islands
-
-    _, lab = islands(model.mesh.faces)
-    chosen: list[ForceLine] = []
+    sel = [frames[k] for k in loop_ids]
+    src = sources_from_frames(sel, loop_ids=loop_ids, group="loop")
+    if len(sel) < 2:
+        return LineSet(0.0, (), ())
+    lc_inter = auto_lc(src)
+    edge = _edges(tuple(sel))
+    pos_in = {int(v): k for k in loop_ids for v in frames[k].vertices}
+    bvh = mesh_bvh(model.mesh) if params.shielding and model.mesh.n_faces else None
     every: list[ForceLine] = []
-    lc_seen = 0.0
+    from_loop: dict[int, list[tuple[int, ForceLine]]] = {}
+    for k in loop_ids:
+        fr = frames[k]
+        n = len(fr.vertices)
+        lc = float(params.lc) if params.lc is not None else max(loop_radius(fr), lc_inter)
+        p = replace(params, lc=lc, step=params.step if params.step is not None else params.step_factor * lc)
+        fp = (free_points(model.free_points, kt=p.kt, rc=p.rc_factor * lc, kernel=p.g_kernel)
+              if p.use_free_points and len(model.free_points) else None)
+        win = int(round(exclude_fraction * n))
+        mine = src.loop == k
+        ev = IndicatorField(src, p, lc, bvh=bvh, free=fp).evaluate(
+            fr.points, x_vertex=fr.vertices, x_loop=np.full(n, k), x_pos=np.arange(n), x_window=np.full(n, win))
+        nrm, ten = top_normal(ev.H, fr.tangent, fr.normal)  # (16a)
+        f = np.einsum("nij,nj->ni", ev.H, nrm)
+        omega = np.where((f * fr.outward).sum(axis=1) > 0, ten, 0.0)  # attraction index
+        mx = local_maxima(omega)
+        starts = [int(i) for i in mx[np.argsort(-omega[mx])][:starts_per_loop]]
+        for i in np.linspace(0, n, starts_per_loop, endpoint=False).astype(int):
+            if len(starts) >= starts_per_loop:
+                break
+            if omega[i] > 0 and all(min(abs(i - s), n - abs(i - s)) > win // 2 for s in starts):
+                starts.append(int(i))
+        for i in starts:
+            if cancel is not None and cancel():
+                raise Cancelled()
+            dp = np.abs(src.pos - i)
+            inside = mine & (np.minimum(dp, src.loop_len - dp) <= win)
+            sub = src.subset(~inside)
+            field = Biaf(IndicatorField(sub, p, lc, bvh=bvh, free=fp))
+            tg = make_targets(sub.points, edge[~inside], float(p.step), vertex=sub.vertex, island=sub.island)
+            avoid = src.points[inside & (src.pos != i)]
+            ln = trace(field, fr.points[i], fr.tangent[i], fr.normal[i], p, tg, step=float(p.step), avoid=avoid,
+                       start_vertex=int(fr.vertices[i]), start_island=fr.island, cancel=cancel)
+            every.append(ln)
+            if ln.arrived:
+                from_loop.setdefault(k, []).append((pos_in.get(int(ln.end_vertex), -1), ln))
+    chosen: list[ForceLine] = []
     notes = []
-    for isl, loops in by_island.items():
-        if len(loops) < 2:
-            continue
-        sub = Icadm(Mesh(model.mesh.vertices, model.mesh.faces[lab == isl]), free_points=model.free_points)
-        bs = find_candidate_bridges(sub, params, cancel=cancel)
-        lc_seen = lc_seen or bs.lc
-        lines = [c.line for c in bs.candidates]
-        every += lines
-        # lines between loops, by loop pair
-        pair: dict[tuple[int, int], list[ForceLine]] = {}
-        for ln in lines:
-            if not ln.arrived:
+    for a in loop_ids:
+        for b in loop_ids:
+            if b <= a:
                 continue
-            a, b = vert_loop.get(int(ln.start_vertex), -1), vert_loop.get(int(ln.end_vertex), -1)
-            if a < 0 or b < 0 or a == b:
+            ab = [ln for t, ln in from_loop.get(a, []) if t == b]
+            ba = [ln for t, ln in from_loop.get(b, []) if t == a]
+            if len(ab) + len(ba) < 2:
                 continue
-            pair.setdefault((min(a, b), max(a, b)), []).append(ln)
-        if not pair:
-            continue
-        # lines across each loop's own hole, from its best start points
-        ctx = field_context(sub, params)
-        own: dict[int, float] = {}
-        sub_loop = {int(f.vertices[0]): i for i, f in enumerate(ctx.frames)}
-        for k in loops:
-            fr = frames[k]
-            si = sub_loop.get(int(fr.vertices[0]))
-            w = bs.attraction[si] if si is not None and si < len(bs.attraction) else np.zeros(len(fr.vertices))
-            mx = local_maxima(w)
-            mx = mx[np.argsort(-w[mx])][:starts_per_loop] if len(mx) else np.array([int(np.argmax(w))])
-            q, own_lines = _own_quality(ctx, fr, mx, params, cancel)
-            every += own_lines
-            own[k] = q
-        for (a, b), lns in pair.items():
-            others = [ln.quality for (p, q), l2 in pair.items() if (p, q) != (a, b) and ({p, q} & {a, b})
-                      for ln in l2]
-            rivals = max([own[a], own[b], *others], default=0.0)
-            good = [ln for ln in lns if ln.quality > rivals]
-            if len(good) >= 2 or (force and len(lns) >= 2):
-                chosen += sorted(lns if force else good, key=lambda ln: -ln.quality)
-                notes.append(f"loops {a} and {b}: {len(lns)} lines, best {max(ln.quality for ln in lns):.3g} "
-                             f"vs rivals {rivals:.3g}: tunnel")
-            else:
-                notes.append(f"loops {a} and {b}: {len(good)} of {len(lns)} lines beat rivals {rivals:.3g}: "
-                             "no tunnel")
-    return LineSet(lc_seen, tuple(chosen), tuple(every), "; ".join(notes))
+
+            def wins(src_loop: int, to: list[ForceLine]) -> bool:
+                rest = [ln.quality for t, ln in from_loop.get(src_loop, []) if ln not in to]
+                return not to or min(ln.quality for ln in to) > max(rest, default=0.0)
+
+            ok = wins(a, ab) and wins(b, ba)
+            if ok or force:
+                chosen += ab + ba
+            notes.append(f"loops {a} and {b}: {len(ab) + len(ba)} lines join them, "
+                         f"{'a tunnel' if ok else ('forced' if force else 'beaten by lines across their own holes')}")
+    return LineSet(lc_inter, tuple(chosen), tuple(every), "; ".join(notes))
 
 
 def split_line(model: Icadm, frame: LoopFrame, params: FieldParams, *, cancel: Callable[[], bool] | None = None,

@@ -74,7 +74,8 @@ def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> 
 
 
 def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
-         operator: str = "U2", weights: str = "uniform", iterations: int = 2) -> NDArray[np.float64]:
+         operator: str = "U2", weights: str = "uniform", iterations: int = 2,
+         bare: NDArray[np.int64] | None = None) -> NDArray[np.float64]:
     """New positions (V, 3) with the ``free`` vertices moved so that U1 = 0 or U2 = 0 there.
 
     faces must hold every face around the free vertices and, for U2, every face around their
@@ -84,6 +85,10 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
         measured on the big-hole demo, a 62 degree cap of the unit sphere filled after repair:
         Hausdorff 3.0 % of the diagonal with U2, 0.35 % with U3, both cotangent weights).
     weights: "uniform" (the spec's) or "cotan" (recomputed ``iterations`` times).
+    bare: fixed vertices whose own neighbourhood is missing (e.g. a bridge chain whose other side
+        is not filled yet): L at such a vertex is meaningless, so a free vertex j rings from one
+        solves L^min(k, j) x = 0 (next to a bare vertex U1 = 0: positions only as the boundary
+        condition there).
     """
     if operator not in ORDERS:
         raise ValueError(f"operator must be one of {sorted(ORDERS)}, got {operator!r}")
@@ -101,11 +106,82 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
     fixed = np.flatnonzero(~is_free)
     for _ in range(1 if weights == "uniform" else iterations):  # sequential: cotan weights follow the positions
         L = uniform_laplacian(len(v), faces) if weights == "uniform" else cotan_laplacian(out, faces)
-        K = L
-        for _ in range(ORDERS[operator] - 1):  # L^k: k = 3 also matches curvature across the border
-            K = K @ L
-        K = K.tocsr()
-        rows = K[free]
+        k = ORDERS[operator]
+        powers = [L]
+        for _ in range(k - 1):  # L^k: k = 3 also matches curvature across the border
+            powers.append((powers[-1] @ L).tocsr())
+        rows = powers[-1][free]
+        if k > 1 and bare is not None and len(bare):
+            # the row of L^j at f reads L at the vertices up to j-1 rings from f: a free vertex j
+            # rings from a bare vertex solves L^min(k, j) = 0
+            adj = (abs(L) + abs(L.T)) > 0
+            dist = np.full(len(v), k, dtype=np.int64)
+            front = np.zeros(len(v), dtype=bool)
+            front[np.asarray(bare, dtype=np.int64)] = True
+            seen = front.copy()
+            for j in range(1, k):  # sequential: ring after ring
+                front = (adj @ front.astype(np.float64) > 0) & ~seen
+                dist[front] = j
+                seen |= front
+            order = dist[free]
+            if (order < k).any():
+                rows = _mixed_rows(powers, free, order)
         rhs = -(rows[:, fixed] @ out[fixed])
-        out[free] = splu(rows[:, free].tocsc()).solve(rhs)
+        out[free] = _solve(rows[:, free].tocsr(), rhs, out[free])
     return out
+
+
+def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A x = rhs by sparse LU. A free vertex whose row vanished (all its faces degenerate) keeps its
+    position; a system that is still singular (a free region with no path to a fixed vertex) is
+    solved with a tiny diagonal shift towards the current positions."""
+    zero = np.asarray(abs(A).sum(axis=1)).ravel() == 0
+    if zero.any():
+        A = (A + sp.diags(zero.astype(np.float64))).tocsr()
+        rhs = np.where(zero[:, None], x0, rhs)
+    try:
+        return splu(A.tocsc()).solve(rhs)
+    except RuntimeError:  # exactly singular
+        eps = 1e-9 * float(abs(A).max())
+        return splu((A + eps * sp.identity(A.shape[0])).tocsc()).solve(rhs + eps * x0)
+
+
+def _mixed_rows(powers: list[sp.csr_matrix], free: NDArray[np.int64], order: NDArray[np.int64]) -> sp.csr_matrix:
+    """Rows of L^order[i] at free[i], stacked in the order of ``free``."""
+    parts, where = [], []
+    for j in range(1, len(powers) + 1):
+        sel = np.flatnonzero(order == j)
+        if len(sel):
+            parts.append(powers[j - 1][free[sel]])
+            where.append(sel)
+    stacked = sp.vstack(parts).tocsr()
+    pos = np.concatenate(where)
+    inv = np.empty_like(pos)
+    inv[pos] = np.arange(len(pos))
+    return stacked[inv]
+
+
+def tangential_relax(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
+                     iterations: int = 5, step: float = 0.5) -> NDArray[np.float64]:
+    """Even out the free vertices along the surface: each moves ``step`` of the way towards the
+    centroid of its neighbours, with the component along its normal removed (a tangential umbrella
+    step; the shape changes only to second order). Used after cotangent fairing, which places
+    vertices accurately on the surface but unevenly."""
+    v = np.array(vertices, dtype=np.float64, copy=True)
+    f = np.asarray(faces, dtype=np.int64)
+    free = np.unique(np.asarray(free, dtype=np.int64))
+    if not len(free) or not len(f):
+        return v
+    L = uniform_laplacian(len(v), f)[free]
+    for _ in range(iterations):  # sequential: each step starts from the previous positions
+        t = v[f]
+        fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        vn = np.zeros_like(v)
+        for k in range(3):
+            np.add.at(vn, f[:, k], fn)
+        n = vn[free]
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        d = L @ v  # centroid of the neighbours minus the vertex
+        d -= np.einsum("ij,ij->i", d, n)[:, None] * n
+        v[free] += step * d
+    return v

@@ -51,14 +51,12 @@ def edge_scale(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], n_
         return np.where(c > 0, s / np.maximum(c, 1), np.nan)
 
 
-def _corner_angles(p: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
-    t = p[f]
-    out = np.empty(f.shape)
-    for k in range(3):
-        a = t[:, (k + 1) % 3] - t[:, k]
-        b = t[:, (k + 2) % 3] - t[:, k]
-        out[:, k] = np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b))
-    return out
+def _angle_at(p: NDArray[np.float64], apex: NDArray[np.int64], a: NDArray[np.int64],
+              b: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Angle at ``apex`` in the triangles (apex, a, b), radians."""
+    u = p[a] - p[apex]
+    w = p[b] - p[apex]
+    return np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
 
 
 def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: NDArray[np.int64], *,
@@ -78,33 +76,42 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
     fixed_keys = (np.unique(np.sort(halfedges(fixed), axis=1) @ np.array([nv, 1])) if len(fixed)
                   else np.zeros(0, np.int64))
     total = 0
+    active = np.ones(len(f), dtype=bool)  # faces a flip may involve (after a pass: the flipped ones)
+
+    def _has(sorted_keys: NDArray[np.int64], k: NDArray[np.int64]) -> NDArray[np.bool_]:
+        if not len(sorted_keys):
+            return np.zeros(len(k), dtype=bool)
+        i = np.minimum(np.searchsorted(sorted_keys, k), len(sorted_keys) - 1)
+        return sorted_keys[i] == k
+
     for _ in range(max_passes):  # sequential: each pass works on the previous pass's faces
         he = halfedges(f)
         key = he[:, 0] * nv + he[:, 1]
         twin_key = he[:, 1] * nv + he[:, 0]
         order = np.argsort(key)
-        pos = np.searchsorted(key[order], twin_key)
-        pos = np.minimum(pos, len(key) - 1)
-        has = key[order][pos] == twin_key
+        skey = key[order]
+        pos = np.minimum(np.searchsorted(skey, twin_key), len(key) - 1)
+        has = skey[pos] == twin_key
         h1 = np.flatnonzero(has & (he[:, 0] < he[:, 1]))  # each interior edge once
+        h2 = order[pos[h1]]
+        near = active[h1 // 3] | active[h2 // 3]  # an edge can only turn non-Delaunay next to a flip
+        h1, h2 = h1[near], h2[near]
         if not len(h1):
             break
-        h2 = order[pos[h1]]
         f1, f2 = h1 // 3, h2 // 3
         a, b = he[h1, 0], he[h1, 1]
-        c = f[f1, (h1 % 3 + 2) % 3]
-        d = f[f2, (h2 % 3 + 2) % 3]
-        ang = _corner_angles(p, f)
-        alpha = ang[f1, (h1 % 3 + 2) % 3]
-        beta = ang[f2, (h2 % 3 + 2) % 3]
+        kc, kd = (h1 % 3 + 2) % 3, (h2 % 3 + 2) % 3
+        c = f[f1, kc]
+        d = f[f2, kd]
+        alpha = _angle_at(p, c, a, b)
+        beta = _angle_at(p, d, a, b)
         score = alpha + beta - np.pi
         ok = (score > 1e-9) & (c != d)
         if not ok.any():
             break
-        # the new edge must not exist yet
-        ek = np.sort(np.stack([c, d], 1), axis=1) @ np.array([nv, 1])
-        patch_keys = np.unique(np.sort(he, axis=1) @ np.array([nv, 1]))
-        ok &= ~np.isin(ek, patch_keys) & ~np.isin(ek, fixed_keys)
+        # the new edge must not exist yet (in the patch, either direction, or among the fixed faces)
+        ek = np.minimum(c, d) * nv + np.maximum(c, d)
+        ok &= ~_has(skey, c * nv + d) & ~_has(skey, d * nv + c) & ~_has(fixed_keys, ek)
         # no fold: new faces (c, a, d) and (d, b, c) must face like the old pair
         n_old = np.cross(p[b] - p[a], p[c] - p[a]) + np.cross(p[a] - p[b], p[d] - p[b])
         n1 = np.cross(p[a] - p[c], p[d] - p[c])
@@ -130,6 +137,9 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
         f[f1[sel]] = np.stack([c[sel], a[sel], d[sel]], 1)
         f[f2[sel]] = np.stack([d[sel], b[sel], c[sel]], 1)
         total += len(sel)
+        active[:] = False
+        active[f1[sel]] = True
+        active[f2[sel]] = True
     return f, total
 
 

@@ -176,8 +176,10 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
             dp = min(dp, slen[j] - dp)
             if dp <= xwin[i]:
                 continue
-        r = o[j] - xi
-        l2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+        r0 = o[j, 0] - x[i, 0]
+        r1 = o[j, 1] - x[i, 1]
+        r2 = o[j, 2] - x[i, 2]
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
         if l2 < best:
             best = l2
             bj = j
@@ -191,8 +193,10 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
             dp = min(dp, slen[j] - dp)
             if dp <= xwin[i]:
                 continue
-        r = o[j] - xi
-        l2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+        r0 = o[j, 0] - x[i, 0]
+        r1 = o[j, 1] - x[i, 1]
+        r2 = o[j, 2] - x[i, 2]
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
         if l2 * shrink2 - best > prune2 or l2 < 1e-300:
             continue
         pairs += 1
@@ -200,9 +204,12 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
                                       node_start, node_count, tri, tri_vertex, scale):
             continue  # (15) delta_XO = 0
         length = np.sqrt(l2)
-        d = r / length  # (6)
-        s = np.cross(tau[j], d)  # s_O = tau_O x d
-        q4 = 0.5 * (1.0 - d @ b[j])  # (7)
+        d0, d1, d2 = r0 / length, r1 / length, r2 / length  # (6)
+        t0, t1, t2 = tau[j, 0], tau[j, 1], tau[j, 2]
+        s0 = t1 * d2 - t2 * d1  # s_O = tau_O x d
+        s1 = t2 * d0 - t0 * d2
+        s2 = t0 * d1 - t1 * d0
+        q4 = 0.5 * (1.0 - (d0 * b[j, 0] + d1 * b[j, 1] + d2 * b[j, 2]))  # (7)
         if use_fp:
             q2 = q2_kernel(xi, o[j], length, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2,
                            g_kernel)  # (4)
@@ -210,9 +217,15 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         else:
             q12 = _q1(l2, lc2, kernel)
         w = h[j] * q12 * (1.0 + ki * q4)  # (13)
-        for a in range(3):
-            for c in range(3):
-                acc[3 * a + c] += w * d[a] * s[c]  # (12)-(14): h g d s^T
+        acc[0] += w * d0 * s0  # (12)-(14): h g d s^T
+        acc[1] += w * d0 * s1
+        acc[2] += w * d0 * s2
+        acc[3] += w * d1 * s0
+        acc[4] += w * d1 * s1
+        acc[5] += w * d1 * s2
+        acc[6] += w * d2 * s0
+        acc[7] += w * d2 * s1
+        acc[8] += w * d2 * s2
     for k in range(9):
         out_h[i, k] = acc[k]
     out_near[i] = bj

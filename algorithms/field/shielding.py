@@ -1,8 +1,8 @@
 """Shielding (15): is the open segment X -> O blocked by the existing surface?
 
 delta_XO = 0 when the open segment XO crosses any island triangle not incident to O (nor to X,
-when X is a mesh vertex), 1 otherwise. The triangles sit in a bounding-volume hierarchy (BVH,
-median split on the longest axis, leaves of <= 4 triangles) built once with numpy and traversed
+when X is a mesh vertex), 1 otherwise. The triangles sit in a bounding-volume hierarchy (BVH over
+the Morton order of the centroids, leaves of <= 4 triangles) built once with numpy and traversed
 in numba, so one test costs O(log F) box tests instead of F triangle tests.
 
 The segment-triangle test handles the coplanar case too (a segment lying in a triangle's plane,
@@ -55,68 +55,95 @@ class Bvh:
                 self.node_count, self.tri, self.tri_vertex)
 
 
-def build_bvh(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Bvh:
-    """Median-split BVH over the triangles (vertices (V, 3), faces (F, 3)).
+def _morton(c: NDArray[np.float64]) -> NDArray[np.int64]:
+    """30-bit Morton codes of points c (N, 3) in their bounding box."""
+    lo, hi = c.min(axis=0), c.max(axis=0)
+    q = ((c - lo) / np.maximum(hi - lo, 1e-300) * 1023).astype(np.int64)
+    code = np.zeros(len(c), dtype=np.int64)
+    for bit in range(10):
+        for k in range(3):
+            code |= ((q[:, k] >> bit) & 1) << (3 * bit + (2 - k))
+    return code
 
-    The build loops over nodes in Python (a sequential recursion, O(F log F) numpy work overall).
+
+def build_bvh(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Bvh:
+    """BVH over the triangles (vertices (V, 3), faces (F, 3)), built without a per-node Python loop.
+
+    Triangles are sorted along the Morton curve of their centroids; each node's range splits at
+    its middle (a spatial median along the curve), level by level (O(log F) vectorised passes);
+    leaf boxes come from reduceat over the sorted triangles, inner boxes bottom-up from children.
     """
     v = np.asarray(vertices, dtype=np.float64)
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    tri = v[f]
-    cen = tri.mean(axis=1)
-    tmin, tmax = tri.min(axis=1), tri.max(axis=1)
-    order = np.arange(len(f))
-    nmin, nmax, left, right, start, count = [], [], [], [], [], []
-
-    def new_node(s: int, e: int) -> int:
-        idx = order[s:e]
-        nmin.append(tmin[idx].min(axis=0) if e > s else np.zeros(3))
-        nmax.append(tmax[idx].max(axis=0) if e > s else np.zeros(3))
-        left.append(-1)
-        right.append(-1)
-        start.append(s)
-        count.append(e - s)
-        return len(nmin) - 1
-
-    root = new_node(0, len(f))
-    stack = [(root, 0, len(f))] if len(f) else []
-    while stack:  # sequential: each split decides the next
-        node, s, e = stack.pop()
-        if e - s <= LEAF:
-            continue
-        idx = order[s:e]
-        c = cen[idx]
-        axis = int(np.argmax(c.max(axis=0) - c.min(axis=0)))
-        mid = (e - s) // 2
-        part = np.argpartition(c[:, axis], mid)
-        order[s:e] = idx[part]
-        a = new_node(s, s + mid)
-        b = new_node(s + mid, e)
-        left[node], right[node], count[node] = a, b, 0
-        stack.append((a, s, s + mid))
-        stack.append((b, s + mid, e))
     scale = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0))) if len(v) else 1.0
-    return Bvh(np.array(nmin).reshape(-1, 3), np.array(nmax).reshape(-1, 3), np.array(left, dtype=np.int64),
-               np.array(right, dtype=np.int64), np.array(start, dtype=np.int64), np.array(count, dtype=np.int64),
-               tri[order].reshape(-1, 3, 3), f[order].reshape(-1, 3), max(scale, 1e-300))
+    nf = len(f)
+    if nf == 0:
+        z = np.zeros(0, dtype=np.int64)
+        return Bvh(np.zeros((0, 3)), np.zeros((0, 3)), z, z, z, z, np.zeros((0, 3, 3)),
+                   np.zeros((0, 3), dtype=np.int64), max(scale, 1e-300))
+    tri = v[f]
+    order = np.argsort(_morton(tri.mean(axis=1)), kind="stable")
+    tri, f = tri[order], f[order]
+    tmin, tmax = tri.min(axis=1), tri.max(axis=1)
+    starts, ends, parents = [np.array([0])], [np.array([nf])], [np.array([-1])]
+    first = [0]  # index of the first node of each level
+    total = 1
+    while True:  # one pass per level: split every range longer than a leaf at its middle
+        s, e = starts[-1], ends[-1]
+        split = (e - s) > LEAF
+        if not split.any():
+            break
+        ids = first[-1] + np.flatnonzero(split)
+        ss, ee = s[split], e[split]
+        mid = ss + (ee - ss) // 2
+        starts.append(np.stack([ss, mid], 1).ravel())
+        ends.append(np.stack([mid, ee], 1).ravel())
+        parents.append(np.repeat(ids, 2))
+        first.append(total)
+        total += len(starts[-1])
+    start = np.concatenate(starts)
+    end = np.concatenate(ends)
+    parent = np.concatenate(parents)
+    count = end - start
+    left = np.full(total, -1, dtype=np.int64)
+    right = np.full(total, -1, dtype=np.int64)
+    child = np.arange(1, total)
+    left[parent[1::2]] = child[0::2]
+    right[parent[1::2]] = child[1::2]
+    leaf = left < 0
+    count[~leaf] = 0
+    nmin = np.zeros((total, 3))
+    nmax = np.zeros((total, 3))
+    li = np.flatnonzero(leaf)
+    nmin[li] = np.minimum.reduceat(tmin, start[li], axis=0)
+    nmax[li] = np.maximum.reduceat(tmax, start[li], axis=0)
+    for lev in range(len(first) - 1, 0, -1):  # bottom-up: a parent's box is the union of its children
+        ids = np.arange(first[lev], first[lev] + len(starts[lev]))
+        pa = parent[ids]
+        inner = ~leaf[pa]
+        pa, ids = pa[inner], ids[inner]
+        nmin[pa] = np.inf
+        nmax[pa] = -np.inf
+        np.minimum.at(nmin, pa, nmin[ids])
+        np.maximum.at(nmax, pa, nmax[ids])
+    return Bvh(nmin, nmax, left, right, start.astype(np.int64), count.astype(np.int64),
+               np.ascontiguousarray(tri), np.ascontiguousarray(f), max(scale, 1e-300))
 
 
 def mesh_bvh(mesh: Mesh) -> Bvh:
     return build_bvh(mesh.vertices, mesh.faces)
 
 
-@numba.njit(cache=True, fastmath=False)
-def _seg_box(x0, x1, x2, d0, d1, d2, bmin, bmax, pad):
-    """Does the segment X + t D, t in [0, 1], meet the box padded by pad? (slab test)"""
+@numba.njit(cache=True)
+def _seg_box(x, d, node_min, node_max, nd, pad):
+    """Does the segment X + t D, t in [0, 1], meet box nd padded by pad? (slab test)"""
     t0 = 0.0
     t1 = 1.0
-    xs = (x0, x1, x2)
-    ds = (d0, d1, d2)
     for k in range(3):
-        lo = bmin[k] - pad
-        hi = bmax[k] + pad
-        xk = xs[k]
-        dk = ds[k]
+        lo = node_min[nd, k] - pad
+        hi = node_max[nd, k] + pad
+        xk = x[k]
+        dk = d[k]
         if abs(dk) < 1e-300:
             if xk < lo or xk > hi:
                 return False
@@ -135,46 +162,53 @@ def _seg_box(x0, x1, x2, d0, d1, d2, bmin, bmax, pad):
     return True
 
 
+@numba.njit(cache=True, inline="always")
+def _cross(a0, a1, a2, b0, b1, b2):
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
 @numba.njit(cache=True)
-def _seg_tri(x, d, a, b, c, scale):
-    """Does the open segment X + t D, t in (EPS_T, 1 - EPS_T), cross the triangle abc?"""
-    e1 = b - a
-    e2 = c - a
-    n = np.cross(e1, e2)
-    nn = np.sqrt(n @ n)
+def _seg_tri(x, d, tri, k, scale):
+    """Does the open segment X + t D, t in (EPS_T, 1 - EPS_T), cross triangle k of tri (F, 3, 3)?
+    Scalar arithmetic only (no temporary arrays: this is the innermost test)."""
+    a0, a1, a2 = tri[k, 0, 0], tri[k, 0, 1], tri[k, 0, 2]
+    e10, e11, e12 = tri[k, 1, 0] - a0, tri[k, 1, 1] - a1, tri[k, 1, 2] - a2
+    e20, e21, e22 = tri[k, 2, 0] - a0, tri[k, 2, 1] - a1, tri[k, 2, 2] - a2
+    n0, n1, n2 = _cross(e10, e11, e12, e20, e21, e22)
+    nn = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
     if nn == 0.0:
         return False
-    dl = np.sqrt(d @ d)
-    denom = n @ d
-    dist0 = n @ (x - a)
+    d0, d1, d2 = d[0], d[1], d[2]
+    dl = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    w0, w1, w2 = x[0] - a0, x[1] - a1, x[2] - a2
+    denom = n0 * d0 + n1 * d1 + n2 * d2
+    dist0 = n0 * w0 + n1 * w1 + n2 * w2
     if abs(denom) > EPS_PAR * nn * dl:
         t = -dist0 / denom
         if t <= EPS_T or t >= 1.0 - EPS_T:
             return False
-        p = x + t * d - a
-        # barycentric coordinates of p in (e1, e2)
-        d11 = e1 @ e1
-        d12 = e1 @ e2
-        d22 = e2 @ e2
-        p1 = p @ e1
-        p2 = p @ e2
+        p0, p1, p2 = w0 + t * d0, w1 + t * d1, w2 + t * d2
+        d11 = e10 * e10 + e11 * e11 + e12 * e12
+        d12 = e10 * e20 + e11 * e21 + e12 * e22
+        d22 = e20 * e20 + e21 * e21 + e22 * e22
+        q1 = p0 * e10 + p1 * e11 + p2 * e12
+        q2 = p0 * e20 + p1 * e21 + p2 * e22
         den = d11 * d22 - d12 * d12
-        u = (d22 * p1 - d12 * p2) / den
-        v = (d11 * p2 - d12 * p1) / den
+        u = (d22 * q1 - d12 * q2) / den
+        v = (d11 * q2 - d12 * q1) / den
         return u >= 0.0 and v >= 0.0 and u + v <= 1.0
     # parallel: only a segment lying in the plane can cross (Cyrus-Beck clip against the edges)
     if abs(dist0) > EPS_PLANE * nn * scale:
         return False
     t0 = EPS_T
     t1 = 1.0 - EPS_T
-    corners = (a, b, c)
-    for k in range(3):
-        p = corners[k]
-        q = corners[(k + 1) % 3]
-        m = np.cross(n, q - p)  # inward normal of edge pq within the plane (faces wound about n)
-        num = m @ (x - p)
-        den = m @ d
-        tol = 1e-12 * (np.sqrt(m @ m) * scale)
+    for k0 in range(3):
+        k1 = (k0 + 1) % 3
+        pp0, pp1, pp2 = tri[k, k0, 0], tri[k, k0, 1], tri[k, k0, 2]
+        m0, m1, m2 = _cross(n0, n1, n2, tri[k, k1, 0] - pp0, tri[k, k1, 1] - pp1, tri[k, k1, 2] - pp2)
+        num = m0 * (x[0] - pp0) + m1 * (x[1] - pp1) + m2 * (x[2] - pp2)  # inward normal m of the edge
+        den = m0 * d0 + m1 * d1 + m2 * d2
+        tol = 1e-12 * np.sqrt(m0 * m0 + m1 * m1 + m2 * m2) * scale
         if abs(den) < 1e-300:
             if num <= tol:
                 return False
@@ -195,18 +229,17 @@ def _seg_tri(x, d, a, b, c, scale):
 def segment_blocked(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
                     node_count, tri, tri_vertex, scale):
     """(15) True when the open segment x -> o crosses a triangle incident to neither x_vertex nor o_vertex."""
-    d = o - x
-    pad = 1e-9 * scale
-    stack = np.empty(128, dtype=np.int64)
-    top = 0
     if len(node_min) == 0 or len(tri) == 0:
         return False
+    d = o - x
+    pad = 1e-9 * scale
+    stack = np.empty(64, dtype=np.int64)
     stack[0] = 0
     top = 1
     while top > 0:
         top -= 1
         nd = stack[top]
-        if not _seg_box(x[0], x[1], x[2], d[0], d[1], d[2], node_min[nd], node_max[nd], pad):
+        if not _seg_box(x, d, node_min, node_max, nd, pad):
             continue
         if node_left[nd] < 0:
             s = node_start[nd]
@@ -216,7 +249,7 @@ def segment_blocked(x, o, x_vertex, o_vertex, node_min, node_max, node_left, nod
                     continue
                 if x_vertex >= 0 and (tv[0] == x_vertex or tv[1] == x_vertex or tv[2] == x_vertex):
                     continue
-                if _seg_tri(x, d, tri[k, 0], tri[k, 1], tri[k, 2], scale):
+                if _seg_tri(x, d, tri, k, scale):
                     return True
         else:
             stack[top] = node_left[nd]
