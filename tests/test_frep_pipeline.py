@@ -159,3 +159,18 @@ def test_enclosed_volume_matches_the_analytic_one(name, volume):
     p = np.asarray(r.mesh.vertices)[np.asarray(r.mesh.faces)]
     vol = np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6
     assert vol == pytest.approx(volume, rel=0.01)
+
+
+def test_genus_two_block_with_vertical_tubes():
+    # an R-function object with two through holes along the rays: their walls are side faces
+    # (zero projected area) merged into the refined region; fairing alone would pull the tube
+    # walls in, the result must still hug F = 0 with good triangles
+    from algorithms.frep.objects import from_expression
+
+    obj = from_expression("r_and(0.81 - x**2 - 2*y**2 - 4*z**2, "
+                          "r_and((x-0.4)**2 + y**2 - 0.0225, (x+0.4)**2 + y**2 - 0.0225))")
+    r = triangulate_object(obj, qlev=6)
+    m = r.metrics
+    assert m.topology.watertight and m.topology.genus == 2
+    assert m.projected_max < 0.05 * m.voxel
+    assert m.angles.below_20 < 0.02 and m.edge_cv < 0.3 and m.face_normal_mean < 3

@@ -20,9 +20,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ..mesh import Mesh
-from ..topology import boundary_loops, face_adjacency
+from ..topology import boundary_loops, edge_table, face_adjacency
 from .linking import DIAGONALS, Linked, link
-from .metrics import FrepMetrics, measure, project
+from .metrics import FrepMetrics, first_order_distance, measure, project
 from .objects import FRepObject
 from .sampling import Samples, SamplingParams, sample
 
@@ -248,8 +248,21 @@ def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: 
     if params.fairing != "none" and new.any():
         FV = fair(RV, RF, np.flatnonzero(new), operator=params.fairing)
     if params.project and new.any():
+        # Fairing cannot know F: over a merged region that wraps round the object (a tube's wall,
+        # say) U2 = 0 pulls the wall in like a soap film. Fairing is there to bring the new
+        # vertices nearer the curved surface; for each connected group of new vertices that it
+        # took farther from F = 0 (summed |F|/|grad F|), the projection starts from the refined
+        # (flat) positions instead.
         FV = FV.copy()
-        FV[new] = project(obj, FV[new])
+        idx = np.flatnonzero(new)
+        gain = first_order_distance(obj, FV[idx]) - first_order_distance(obj, RV[idx])
+        e = edge_table(RF).edges
+        e = e[new[e[:, 0]] & new[e[:, 1]]]
+        g = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(len(RV), len(RV)))
+        _, lab = connected_components(g, directed=False)
+        worse = np.bincount(lab[idx], weights=gain, minlength=lab.max() + 1) > 0
+        start = np.where(worse[lab][:, None], RV, FV)
+        FV[new] = project(obj, start[new])
     if params.smooth:
         FV = tangential_smooth(obj, FV, RF, rounds=params.smooth)
     faired = Mesh(FV, RF)
