@@ -205,3 +205,50 @@ def split_polygon(polygon: tuple[int, ...], i: int, j: int,
     seq2 = [polygon[(j + k) % n] for k in range(((i - j) % n) + 1)]  # p_j .. p_i
     c = [int(x) for x in chain]
     return tuple(seq1 + c[::-1]), tuple(seq2 + c)
+
+
+class TopologyGuard:
+    """What a new bridge does to the topology of the surface being built.
+
+    Every hole is darned as a disk, so each bridge either
+    - connects two components (its ends on surfaces not yet joined): the genus is unchanged;
+    - splits one hole in two (both ends on the same walk): the genus is unchanged;
+    - joins two different holes of one component: that adds a handle (genus + 1).
+    The third kind is a tunnel, which only the tunnel rule (§6 step 2) may decide.
+    """
+
+    def __init__(self, loops: list[NDArray[np.int64]], loop_island: list[int]) -> None:
+        self.loops = loops
+        self.parent = {i: i for i in set(loop_island)}
+        self.island_of = {int(v): isl for lp, isl in zip(loops, loop_island) for v in lp}
+        self.walk_of: dict[int, int] = {}
+        self.refresh([], [])
+
+    def find(self, i: int) -> int:
+        while self.parent[i] != i:
+            self.parent[i] = self.parent[self.parent[i]]
+            i = self.parent[i]
+        return i
+
+    def refresh(self, bridges: list[Bridge], chains: list[NDArray[np.int64]]) -> None:
+        """Recompute which walk each loop vertex lies on (after bridges were added)."""
+        self.walk_of = {}
+        for k, h in enumerate(walk_holes(self.loops, bridges, chains)):
+            for v in h.polygon:
+                self.walk_of.setdefault(int(v), k)
+        for b in bridges:
+            ia, ib = self.island_of.get(b.start), self.island_of.get(b.end)
+            if ia is not None and ib is not None:
+                self.parent[self.find(ia)] = self.find(ib)
+
+    def effect(self, a: int, b: int) -> str:
+        """"connect", "split" or "handle" for a bridge from loop vertex a to loop vertex b."""
+        if self.find(self.island_of[a]) != self.find(self.island_of[b]):
+            return "connect"
+        return "split" if self.walk_of.get(a) == self.walk_of.get(b) else "handle"
+
+    def components(self) -> dict[int, list[int]]:
+        out: dict[int, list[int]] = {}
+        for i in self.parent:
+            out.setdefault(self.find(i), []).append(i)
+        return out

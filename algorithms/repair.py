@@ -24,7 +24,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .boundary import loop_frames, summarize, vertex_normals
-from .bridge_graph import Bridge, ConflictRules, GraphState, resample_chain, split_polygon, walk_holes
+from .bridge_graph import (
+    Bridge,
+    ConflictRules,
+    GraphState,
+    TopologyGuard,
+    resample_chain,
+    split_polygon,
+    walk_holes,
+)
 from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
 from .metrics import angle_stats, min_angles, topology
@@ -193,7 +201,7 @@ class _Work:
 def _chain_normals(line: ForceLine | None, pts: NDArray[np.float64]) -> NDArray[np.float64]:
     """Normals for chain points: the force line's normal at the nearest traced point."""
     if line is None or not len(pts) or not len(line.points):
-        return np.zeros((len(pts), 3))
+        return np.zeros((len(pts), 3))  # no force line: the fairing and hole frames use the ends
     d = np.linalg.norm(pts[:, None, :] - line.points[None, :, :], axis=2)
     return line.normals[np.argmin(d, axis=1)]
 
@@ -237,6 +245,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     rules = ConflictRules(clearance=params.clearance_factor * spacing,
                           neighbourhood=params.neighbourhood_factor * lc_for_rules, endpoint_gap=2)
     state = GraphState(work.V(), loop_of, [len(lp) for lp in loops], rules)
+    guard = TopologyGuard(loops, [f.island for f in frames])
+    notes: list[str] = []
     pending: list[tuple[int, Bridge, ForceLine, str]] = []
     n_arrived = 0
 
@@ -266,14 +276,40 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         lc_used = found.lc
         lines += list(found.all_lines)
         state.rules = rules = replace(rules, neighbourhood=params.neighbourhood_factor * lc_used)
-        for b, ln in as_bridges(list(found.lines), "island"):
+        # loop pairs joined by many lines first (a band between two islands), then by quality:
+        # a stray line into an unrelated hole must not be the one that connects two islands
+        cands = as_bridges(list(found.lines), "island")
+        support: dict[tuple[int, int], int] = {}
+        for b, _ in cands:
+            key = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
+            support[key] = support.get(key, 0) + 1  # type: ignore[index]
+        cands.sort(key=lambda c: (-support[tuple(sorted((loop_of[c[0].start][0], loop_of[c[0].end][0])))],
+                                  -c[0].quality))
+        for b, ln in cands:
             n_arrived += 1
             why = state.conflict(b)
+            if why is None and guard.effect(b.start, b.end) == "handle":
+                why = "would join two holes of one surface (a handle; only the tunnel rule adds those)"
             if why is None:
                 keep(b, ln)
+                guard.refresh(bridges, chains)
             else:
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
+        # components no line joined: the best straight bridge between their nearest loops
+        for _ in range(n_isl):
+            comps = list(guard.components().values())
+            if len(comps) < 2:
+                break
+            sb = _join_components(work.V(), work.N(), frames, comps, lc_used, params.field.ki)
+            if sb is None:
+                break
+            ia, ib, q = sb
+            b = Bridge(ia, ib, resample_chain(np.vstack([mesh.vertices[ia], mesh.vertices[ib]]), spacing), q,
+                       "island")
+            keep(b, None)
+            guard.refresh(bridges, chains)
+            notes.append(f"islands {sorted(comps[0])} joined by a straight bridge: no force line joined them")
     timings["bridges"] = time.perf_counter() - t0
 
     # 2. tunnels: among the non-trivial boundaries no island bridge reached (loops of islands
@@ -444,7 +480,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     step(1.0, "repaired")
     return RepairResult(out, model, params, class_found, tuple(bridges), tuple(lines), tuple(rejected),
                         tuple(records), tuple(stages), new_faces, timings, lc_used,
-                        timings_note.get("fairing", "none"), tunnel_note)
+                        timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "))
 
 
 def _neighbourhood(V: NDArray[np.float64], F: NDArray[np.int64], poly: tuple[int, ...], *,
@@ -464,6 +500,34 @@ def _neighbourhood(V: NDArray[np.float64], F: NDArray[np.int64], poly: tuple[int
     remap = np.full(len(V), -1, dtype=np.int64)
     remap[glob] = np.arange(len(glob))
     return V[glob], remap[F[fmask]], glob
+
+
+def _join_components(V: NDArray[np.float64], N: NDArray[np.float64], frames: list, comps: list[list[int]],
+                     lc: float, ki: float) -> tuple[int, int, float] | None:
+    """The best straight bridge from the first component's loops to any other component's loops
+    (straight-bridge quality of spec §3, as in _straight_bridge)."""
+    first = set(comps[0])
+    a_fr = [f for f in frames if f.island in first]
+    b_fr = [f for f in frames if f.island not in first]
+    if not a_fr or not b_fr:
+        return None
+    A = np.concatenate([f.vertices for f in a_fr])
+    B = np.concatenate([f.vertices for f in b_fr])
+    ta = np.concatenate([f.tangent for f in a_fr])
+    tb = np.concatenate([f.tangent for f in b_fr])
+    na = np.concatenate([f.normal for f in a_fr])
+    d = V[B][None, :, :] - V[A][:, None, :]
+    L = np.linalg.norm(d, axis=2)
+    u = d / np.maximum(L, 1e-300)[..., None]
+    sa = np.cross(u, ta[:, None, :])  # (1a)
+    sb = np.cross(-u, tb[None, :, :])  # (1b)
+    qT = np.einsum("ijk,ijk->ij", sa, sb)  # (2)
+    q4 = (1 + np.einsum("ijk,ijk->ij", sa, na[:, None, :])) / 2  # (7)
+    Q = np.where(qT > 0, qT * np.exp(-(L / max(lc, 1e-12)) ** 2) * (1 + ki * q4), -np.inf)  # (9)
+    i, j = np.unravel_index(int(np.argmax(Q)), Q.shape)
+    if not np.isfinite(Q[i, j]):
+        i, j = np.unravel_index(int(np.argmin(L)), L.shape)
+    return int(A[i]), int(B[j]), float(Q[i, j]) if np.isfinite(Q[i, j]) else 0.0
 
 
 def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:
