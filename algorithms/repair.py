@@ -283,13 +283,28 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         for b, _ in cands:
             key = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
             support[key] = support.get(key, 0) + 1  # type: ignore[index]
+        # island lines may also close a handle (a torus cut into pieces), but only between two
+        # loops that many good lines join: at least three, with a median quality at least half
+        # the best pair's of each loop. A stray line into an unrelated hole fails that.
+        by_pair: dict[tuple[int, int], list[float]] = {}
+        for b, _ in cands:
+            key = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
+            by_pair.setdefault(key, []).append(b.quality)  # type: ignore[arg-type]
+        med = {key: float(np.median(qs)) for key, qs in by_pair.items()}
+        best: dict[int, float] = {}
+        for key, m in med.items():
+            for lp in key:
+                best[lp] = max(best.get(lp, 0.0), m)
+        handle_pairs = {key for key, qs in by_pair.items()
+                        if len(qs) >= 3 and med[key] >= 0.5 * min(best[key[0]], best[key[1]])}
         cands.sort(key=lambda c: (-support[tuple(sorted((loop_of[c[0].start][0], loop_of[c[0].end][0])))],
                                   -c[0].quality))
         for b, ln in cands:
             n_arrived += 1
             why = state.conflict(b)
-            if why is None and guard.effect(b.start, b.end) == "handle":
-                why = "would join two holes of one surface (a handle; only the tunnel rule adds those)"
+            pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
+            if why is None and guard.effect(b.start, b.end) == "handle" and pair not in handle_pairs:
+                why = "would join two holes of one surface (a handle the tunnel rule does not support)"
             if why is None:
                 keep(b, ln)
                 guard.refresh(bridges, chains)
