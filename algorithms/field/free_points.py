@@ -40,7 +40,7 @@ class FreePoints:
     dims: NDArray[np.int64]
     cell_start: NDArray[np.int64]
     cell_points: NDArray[np.float64]
-    g_max: float  # an upper bound of sum_i G anywhere (for pruning far pairs)
+    g_max: float  # an estimate of the largest sum_i G anywhere (for pruning far pairs)
     tree: cKDTree = field(repr=False)
 
     @property
@@ -69,9 +69,13 @@ def free_points(points: NDArray[np.float64], *, kt: float, rc: float, kernel: st
     order = np.argsort(lin, kind="stable")
     counts = np.bincount(lin, minlength=int(np.prod(dims)))
     start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    # upper bound of sum G: G0 times the most free points within the cutoff of one free point
-    nb = tree.query_ball_point(p, cut, return_length=True)
-    gmax = g0(kt) * float(np.max(nb))
+    # an estimate of max sum G over space, for pruning: sum G is largest at the free points
+    # themselves (G decreases with distance); 1.25 x the largest sum at a free point + G's tail
+    k = min(len(p), 32)
+    dist, _ = tree.query(p, k=k, distance_upper_bound=cut)
+    dist = np.where(np.isfinite(dist), dist, np.inf)
+    gs = free_point_g(dist, kt, rc, kernel).sum(axis=1)
+    gmax = 1.25 * float(gs.max()) + g0(kt) * 1e-4 * len(p)
     return FreePoints(p, kt, rc, kernel, cut, lo, float(cell), dims, start, np.ascontiguousarray(p[order]), gmax, tree)
 
 
