@@ -173,18 +173,56 @@ def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, s
 
 
 @numba.njit(cache=True)
+def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr):
+    """(visible, q2 / L) of the pair X -> source j: shielding (15) and free points (4).
+    bv: the BVH arrays and scale; gr: the free-point grid arguments of q2_kernel."""
+    if shield and segment_blocked(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6], bv[7],
+                                  bv[8]):
+        return False, 1.0  # (15) delta_XO = 0
+    if not use_fp:
+        return True, 1.0
+    r0 = o[j, 0] - xi[0]
+    r1 = o[j, 1] - xi[1]
+    r2 = o[j, 2] - xi[2]
+    length = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    q2 = q2_kernel(xi, o[j], length, gr[0], gr[1], gr[2], gr[3], gr[4], gr[5], gr[6], gr[7], gr[8])  # (4)
+    return True, q2 / length
+
+
+COS_COHERENT = np.cos(np.radians(10.0))  # anchors closer than this angle seen from X may be interpolated
+
+
+@numba.njit(cache=True)
+def _narrow(x, oa, ob):
+    """Do oa and ob subtend less than 10 degrees at x? (only then is coherence trusted)"""
+    a0, a1, a2 = oa[0] - x[0], oa[1] - x[1], oa[2] - x[2]
+    b0, b1, b2 = ob[0] - x[0], ob[1] - x[1], ob[2] - x[2]
+    dot = a0 * b0 + a1 * b1 + a2 * b2
+    na = a0 * a0 + a1 * a1 + a2 * a2
+    nb = b0 * b0 + b1 * b1 + b2 * b2
+    return dot > 0 and dot * dot > COS_COHERENT * COS_COHERENT * na * nb
+
+
+@numba.njit(cache=True)
 def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs):
-    """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8)."""
+    """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8).
+
+    Visibility coherence (choice, documented): along a run of consecutive sources of one loop,
+    delta and q2/L are evaluated exactly at every ``stride``-th source; between two such anchors
+    that agree (both visible or both shielded) and subtend less than 10 degrees at X, delta is
+    taken from them and q2/L interpolated linearly; otherwise every source in between is tested.
+    So near sources (large angles) are always exact; stride = 1 is exact everywhere.
+    """
     m = o.shape[0]
     xi = x[i]
-    acc = np.zeros(9)
+    bv = (node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale)
+    gr = (g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel)
     best = 1e300
     bj = -1
-    pairs = 0
     for j in range(m):  # pass 1: the nearest admissible source
         if sgrp[j] == xgrp[i]:
             continue
@@ -200,9 +238,11 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         if l2 < best:
             best = l2
             bj = j
-    # relative pruning: skip a source whose weight is below ~1e-7 of the nearest one's
-    # ((L * shrink)^2 - best > prune2 with shrink = 1 / (1 + max sum G): q2 >= L * shrink)
-    for j in range(m):  # pass 2: the field
+    # pass 2: the candidates, pruned relative to the nearest source:
+    # (L * shrink)^2 - best > prune2, shrink = 1 / (1 + G(0)) in full mode with free points
+    cand = np.empty(m, dtype=np.int64)
+    nc = 0
+    for j in range(m):
         if sgrp[j] == xgrp[i]:
             continue
         if xwin[i] >= 0 and sloop[j] == xloop[i]:
@@ -216,10 +256,46 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         l2 = r0 * r0 + r1 * r1 + r2 * r2
         if l2 * shrink2 - best > prune2 or l2 < 1e-300:
             continue
-        pairs += 1
-        if shield and segment_blocked(xi, o[j], xv[i], ov[j], node_min, node_max, node_left, node_right,
-                                      node_start, node_count, tri, tri_vertex, scale):
+        cand[nc] = j
+        nc += 1
+    vis = np.ones(nc, dtype=np.bool_)
+    ratio = np.ones(nc)
+    k = 0
+    while k < nc:  # runs of consecutive sources of one loop
+        e = k + 1
+        while e < nc and cand[e] == cand[e - 1] + 1 and sloop[cand[e]] == sloop[cand[k]]:
+            e += 1
+        a = k
+        va, ra = _pair_eval(xi, xv[i], cand[a], o, ov, shield, bv, use_fp, gr)
+        vis[a] = va
+        ratio[a] = ra
+        while a < e - 1:
+            bb = min(a + stride, e - 1)
+            vb, rb = _pair_eval(xi, xv[i], cand[bb], o, ov, shield, bv, use_fp, gr)
+            vis[bb] = vb
+            ratio[bb] = rb
+            if vb == va and _narrow(xi, o[cand[a]], o[cand[bb]]):
+                for t in range(a + 1, bb):
+                    vis[t] = va
+                    ratio[t] = ra + (rb - ra) * (t - a) / (bb - a)
+            else:
+                for t in range(a + 1, bb):
+                    vt, rt = _pair_eval(xi, xv[i], cand[t], o, ov, shield, bv, use_fp, gr)
+                    vis[t] = vt
+                    ratio[t] = rt
+            a = bb
+            va = vb
+            ra = rb
+        k = e
+    acc = np.zeros(9)
+    for c in range(nc):
+        if not vis[c]:
             continue  # (15) delta_XO = 0
+        j = cand[c]
+        r0 = o[j, 0] - x[i, 0]
+        r1 = o[j, 1] - x[i, 1]
+        r2 = o[j, 2] - x[i, 2]
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
         length = np.sqrt(l2)
         d0, d1, d2 = r0 / length, r1 / length, r2 / length  # (6)
         t0, t1, t2 = tau[j, 0], tau[j, 1], tau[j, 2]
@@ -227,12 +303,8 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         s1 = t2 * d0 - t0 * d2
         s2 = t0 * d1 - t1 * d0
         q4 = 0.5 * (1.0 - (d0 * b[j, 0] + d1 * b[j, 1] + d2 * b[j, 2]))  # (7)
-        if use_fp:
-            q2 = q2_kernel(xi, o[j], length, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2,
-                           g_kernel)  # (4)
-            q12 = _q1(q2 * q2, lc2, kernel)  # (8)
-        else:
-            q12 = _q1(l2, lc2, kernel)
+        q2 = ratio[c] * length  # (4); = L without free points
+        q12 = _q1(q2 * q2, lc2, kernel)  # (8)
         w = h[j] * q12 * (1.0 + ki * q4)  # (13)
         acc[0] += w * d0 * s0  # (12)-(14): h g d s^T
         acc[1] += w * d0 * s1
@@ -243,22 +315,22 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         acc[6] += w * d2 * s0
         acc[7] += w * d2 * s1
         acc[8] += w * d2 * s2
-    for k in range(9):
-        out_h[i, k] = acc[k]
+    for k2 in range(9):
+        out_h[i, k2] = acc[k2]
     out_near[i] = bj
     out_dist[i] = np.sqrt(best) if bj >= 0 else np.inf
-    out_pairs[i] = pairs
+    out_pairs[i] = nc
 
 
 @numba.njit(cache=True, parallel=True)
 def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs):
     for i in numba.prange(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs)
@@ -266,13 +338,13 @@ def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, s
 
 @numba.njit(cache=True)
 def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs):
     for i in range(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
                 use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
                 out_h, out_near, out_dist, out_pairs)
@@ -415,7 +487,7 @@ class IndicatorField:
                 kern = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
                 kern(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
                             S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
-                     self.shrink ** 2,
+                     self.shrink ** 2, int(p.shield_stride),
                             self.shield, *barr, bvh.scale if bvh is not None else 1.0,
                             self.free is not None, *garr, H[sl], near[sl], dist[sl], cnt)
                 pairs += int(cnt.sum())
