@@ -181,19 +181,23 @@ def local_maxima(omega: Arr, *, floor: float = 0.0) -> NDArray[np.int64]:
     return np.flatnonzero((w > floor) & (w > prev) & (w >= nxt))
 
 
-def _trace_unit(ctx: FieldContext, loop: int, index: int, params: FieldParams,
-                normal_hint: Arr | None = None) -> ForceLine:
-    """A line from point `index` of loop `loop` with sources = the other units' boundary points."""
+def _unit_tools(ctx: FieldContext, unit: int, params: FieldParams) -> tuple:
+    """What every line from one base unit shares: its field, targets and avoid tree (built once)."""
     S = ctx.sources
-    fr = ctx.frames[loop]
-    g = ctx.unit[loop]
-    other = S.group != g
+    other = S.group != unit
     sub = S.subset(other)
     field = Biaf(IndicatorField(sub, params, ctx.lc, bvh=ctx.bvh, free=ctx.free))
     tg = make_targets(sub.points, ctx.edge[other], ctx.step, vertex=sub.vertex, island=sub.island)
-    return trace(field, fr.points[index], fr.tangent[index], fr.normal[index] if normal_hint is None else normal_hint,
-                 params, tg, step=ctx.step, avoid=S.points[~other], start_vertex=int(fr.vertices[index]),
-                 start_island=fr.island)
+    mine = S.points[~other]
+    return field, tg, cKDTree(mine) if len(mine) else None
+
+
+def _trace_unit(ctx: FieldContext, loop: int, index: int, params: FieldParams, tools: tuple | None = None) -> ForceLine:
+    """A line from point `index` of loop `loop` with sources = the other units' boundary points."""
+    fr = ctx.frames[loop]
+    field, tg, avoid = tools if tools is not None else _unit_tools(ctx, int(ctx.unit[loop]), params)
+    return trace(field, fr.points[index], fr.tangent[index], fr.normal[index], params, tg, step=ctx.step,
+                 avoid=avoid, start_vertex=int(fr.vertices[index]), start_island=fr.island)
 
 
 def trace_in_loop(model_or_ctx: Icadm | FieldContext, frame: LoopFrame, start_index: int, params: FieldParams, *,
@@ -295,10 +299,14 @@ def find_candidate_bridges(model: Icadm, params: FieldParams, *, progress: Calla
     t = time.perf_counter()
     cands = []
     fp = ctx.model.free_points if params.use_free_points else None
+    tools: dict[int, tuple] = {}
     for k, (li, i) in enumerate(starts):  # lines are independent; traced one after the other
         check()
         report(0.1 + 0.9 * k / max(len(starts), 1), f"tracing line {k + 1} of {len(starts)}")
-        line = _trace_unit(ctx, li, i, params_used)
+        u = int(ctx.unit[li])
+        if u not in tools:
+            tools[u] = _unit_tools(ctx, u, params_used)
+        line = _trace_unit(ctx, li, i, params_used, tools[u])
         fac = None
         if line.arrived:
             fa, ia = li, i

@@ -406,6 +406,54 @@ def _normal_one(hm, t, hint):
     return n, hm @ n
 
 
+@numba.njit(cache=True, fastmath=True)
+def _h_one_light(x, o, tau, b, h, lc2, ki, kernel, prune2):
+    """Light-mode H at one point against every source (no exclusions): the tracing step."""
+    m = o.shape[0]
+    x0, x1, x2 = x[0], x[1], x[2]
+    best = 1e300
+    for j in range(m):
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
+        best = min(best, l2)
+    lim = best + prune2
+    hm = np.zeros((3, 3))
+    for j in range(m):
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
+        if l2 > lim or l2 < 1e-300:
+            continue
+        il = 1.0 / np.sqrt(l2)
+        d0, d1, d2 = r0 * il, r1 * il, r2 * il  # (6)
+        t0, t1, t2 = tau[j, 0], tau[j, 1], tau[j, 2]
+        s0 = t1 * d2 - t2 * d1  # s_O = tau_O x d
+        s1 = t2 * d0 - t0 * d2
+        s2 = t0 * d1 - t1 * d0
+        q4 = 0.5 * (1.0 - (d0 * b[j, 0] + d1 * b[j, 1] + d2 * b[j, 2]))  # (7)
+        w = h[j] * _q1(l2, lc2, kernel) * (1.0 + ki * q4)  # (13)
+        hm[0, 0] += w * d0 * s0  # (12)-(14)
+        hm[0, 1] += w * d0 * s1
+        hm[0, 2] += w * d0 * s2
+        hm[1, 0] += w * d1 * s0
+        hm[1, 1] += w * d1 * s1
+        hm[1, 2] += w * d1 * s2
+        hm[2, 0] += w * d2 * s0
+        hm[2, 1] += w * d2 * s1
+        hm[2, 2] += w * d2 * s2
+    return hm
+
+
+@numba.njit(cache=True)
+def _sample_light(x, t, hint, o, tau, b, h, lc2, ki, kernel, prune2):
+    """One tracing step in light mode: H, then n from (16b) and F = H n, in one call."""
+    hm = _h_one_light(x, o, tau, b, h, lc2, ki, kernel, prune2)
+    return _normal_one(hm, t, hint)
+
+
 class IndicatorField:
     """BIAF over a set of sources (the field of §4) with the parameters' mode.
 
@@ -435,9 +483,18 @@ class IndicatorField:
         # the heavy-tailed kernel is never pruned.
         self.prune = PRUNE_GAUSS * self.lc if self.kernel == 0 else np.inf
         self.shrink = 1.0 / (1.0 + gmax)
+        self._prune2 = min(self.prune * self.prune, 1e300) if np.isfinite(self.prune) else 1e300
 
     def sample_one(self, x: Arr, tangent: Arr, hint: Arr) -> tuple[Arr, Arr, float]:
         """One point, no exclusions (a tracing step): (n, F = H n, |F|) with n from (16b)."""
+        if not self.full:
+            S = self.sources
+            if len(S) == 0:
+                return np.asarray(hint, dtype=np.float64), np.zeros(3), 0.0
+            n, f = _sample_light(np.asarray(x, dtype=np.float64), np.asarray(tangent, dtype=np.float64),
+                                 np.asarray(hint, dtype=np.float64), S.points, S.tangent, S.outward, S.charge,
+                                 self.lc * self.lc, float(self.params.ki), self.kernel, self._prune2)
+            return n, f, float(np.sqrt(f @ f))
         ev = self.evaluate(np.asarray(x, dtype=np.float64).reshape(1, 3))
         n, f = _normal_one(ev.H[0], np.asarray(tangent, dtype=np.float64), np.asarray(hint, dtype=np.float64))
         return n, f, float(np.sqrt(f @ f))
