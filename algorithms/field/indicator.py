@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from ..boundary import LoopFrame
 from ..params import FieldParams
-from .free_points import FreePoints, grid_args, q2_kernel
+from .free_points import FreePoints, lattice_args, q2_lattice
 from .quality import g0
 from .shielding import Bvh, segment_blocked
 
@@ -175,7 +175,7 @@ def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, s
 @numba.njit(cache=True)
 def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr):
     """(visible, q2 / L) of the pair X -> source j: shielding (15) and free points (4).
-    bv: the BVH arrays and scale; gr: the free-point grid arguments of q2_kernel."""
+    bv: the BVH arrays and scale; gr: the free-point lattice arguments of q2_lattice."""
     if shield and segment_blocked(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6], bv[7],
                                   bv[8]):
         return False, 1.0  # (15) delta_XO = 0
@@ -185,7 +185,7 @@ def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr):
     r1 = o[j, 1] - xi[1]
     r2 = o[j, 2] - xi[2]
     length = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
-    q2 = q2_kernel(xi, o[j], length, gr[0], gr[1], gr[2], gr[3], gr[4], gr[5], gr[6], gr[7], gr[8])  # (4)
+    q2 = q2_lattice(xi, o[j], length, gr[0], gr[1], gr[2], gr[3])  # (4)
     return True, q2 / length
 
 
@@ -207,7 +207,7 @@ def _narrow(x, oa, ob):
 def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8).
 
@@ -220,7 +220,7 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     m = o.shape[0]
     xi = x[i]
     bv = (node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale)
-    gr = (g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel)
+    gr = (g_origin, g_cell, g_dims, g_lattice)
     best = 1e300
     bj = -1
     for j in range(m):  # pass 1: the nearest admissible source
@@ -326,13 +326,13 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
 def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in numba.prange(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
 
 
@@ -340,13 +340,13 @@ def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, s
 def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in range(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
 
 
@@ -539,7 +539,7 @@ class IndicatorField:
             else:
                 bvh = self.bvh
                 barr = bvh.arrays() if bvh is not None else _EMPTY_BVH
-                garr = grid_args(self.free) if self.free is not None else _EMPTY_GRID
+                garr = lattice_args(self.free) if self.free is not None else _EMPTY_GRID
                 cnt = np.zeros(sl.stop - sl.start, dtype=np.int64)
                 kern = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
                 kern(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
@@ -554,8 +554,7 @@ class IndicatorField:
 _EMPTY_BVH = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
               np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
               np.zeros((0, 3), dtype=np.int64))
-_EMPTY_GRID = (np.zeros(3), 1.0, np.ones(3, dtype=np.int64), np.zeros(2, dtype=np.int64), np.zeros((0, 3)), 0.0, 1.0,
-               0.0, 0)
+_EMPTY_GRID = (np.zeros(3), 1.0, np.ones(3, dtype=np.int64), np.zeros(1))
 
 
 def direct_tensor(x: Arr, sources: Sources, params: FieldParams, lc: float) -> Arr:
