@@ -52,26 +52,35 @@ class LoopFrame:
         return float(np.linalg.norm(np.roll(self.points, -1, axis=0) - self.points, axis=1).sum())
 
 
-def loop_frame(mesh: Mesh, loop: NDArray[np.int64], *, island: int = 0,
-               normals: NDArray[np.float64] | None = None, charge: str = "length") -> LoopFrame:
-    """Frames of one boundary loop (walked in the positive direction).
+def frame_of(points: NDArray[np.float64], normals: NDArray[np.float64], vertices: NDArray[np.int64], *,
+             island: int = -1, charge: str = "length") -> LoopFrame:
+    """Frames (spec §2) of a closed walk with the surface on its left (a boundary loop in its
+    positive direction, or a hole polygon): tau from the neighbouring edges, n the given surface
+    normals, b = tau x n, h per the charge rule.
 
     charge: "length" (default, spec §2 choice: half the sum of the two boundary edges at O, so
     the field does not change when the boundary is resampled) or "unit" (h = 1).
     """
-    p = mesh.vertices[loop]
+    p = np.asarray(points, dtype=np.float64)
     e_out = np.roll(p, -1, axis=0) - p  # O -> next
     e_in = p - np.roll(p, 1, axis=0)  # prev -> O
     tau = _unit(_unit(e_in) + _unit(e_out))  # §2: normalised sum of incoming and outgoing directions
-    nrm = (vertex_normals(mesh) if normals is None else normals)[loop]
+    nrm = _unit(np.asarray(normals, dtype=np.float64))
     b = _unit(np.cross(tau, nrm))  # b_O = tau_O x n_O
     if charge == "length":
         h = 0.5 * (np.linalg.norm(e_in, axis=1) + np.linalg.norm(e_out, axis=1))
     elif charge == "unit":
-        h = np.ones(len(loop))
+        h = np.ones(len(p))
     else:
         raise ValueError(f"charge must be 'length' or 'unit', not {charge!r}")
-    return LoopFrame(np.asarray(loop, dtype=np.int64), p, tau, nrm, b, h, island)
+    return LoopFrame(np.asarray(vertices, dtype=np.int64), p, tau, nrm, b, h, island)
+
+
+def loop_frame(mesh: Mesh, loop: NDArray[np.int64], *, island: int = 0,
+               normals: NDArray[np.float64] | None = None, charge: str = "length") -> LoopFrame:
+    """Frames of one boundary loop of the mesh (walked in the positive direction)."""
+    nrm = (vertex_normals(mesh) if normals is None else normals)[loop]
+    return frame_of(mesh.vertices[loop], nrm, loop, island=island, charge=charge)
 
 
 def loop_frames(mesh: Mesh, *, charge: str = "length") -> list[LoopFrame]:

@@ -1,7 +1,7 @@
 """The headless `bridgefield` subcommands (no Qt, no pyvista).
 
 Each subcommand is a module of this package with ``NAME``, ``HELP``, ``add_arguments(parser)``
-and ``run(args) -> int``; ``COMMANDS`` lists them. The console script (viewer/cli.py) adds the
+and ``run(args) -> int``; they are found automatically (``COMMANDS``). The console script (viewer/cli.py) adds the
 commands that draw (``shot`` and opening the explorer).
 """
 
@@ -13,7 +13,19 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-COMMANDS = ("info", "demos", "bridges")
+ORDER = ("info", "demos", "bridges", "repair", "hybrid", "frep")  # listing order in --help
+
+
+def _discover() -> tuple[str, ...]:
+    """Every module of this package that defines a subcommand (has NAME and run)."""
+    import pkgutil
+    from pathlib import Path
+
+    names = [m.name for m in pkgutil.iter_modules([str(Path(__file__).parent)]) if m.name not in ("common",)]
+    return tuple(sorted(names, key=lambda n: (ORDER.index(n) if n in ORDER else len(ORDER), n)))
+
+
+COMMANDS = _discover()
 
 
 def command_modules() -> list[ModuleType]:

@@ -1,0 +1,207 @@
+"""The bridge graph: choosing non-conflicting bridges and extracting the holes they bound.
+
+spec/repair.md §6 step 1. A bridge joins two boundary vertices A and B by a chain of new
+vertices (the points of its force line). Candidates conflict when they share an endpoint,
+cross or run too close to a kept bridge, or duplicate a connection between the same two loops
+in the same neighbourhood; conflicts are resolved by keeping the best quality first.
+
+Holes are extracted by the walking rule: walk each boundary loop in its positive direction; at a
+vertex where a bridge starts, take the bridge; on arriving, continue along the arrival loop in
+its positive direction. Each bridge is walked once in each direction and each closed walk is a
+new hole. A walk that uses one bridge twice bounds a region that is not a disk.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+
+@dataclass(frozen=True, eq=False)
+class Bridge:
+    """A bridge from boundary vertex ``start`` to boundary vertex ``end``.
+
+    points: (K, 3) the chain's interior points, in order from start to end (may be empty).
+    kind: "island" (joins islands), "tunnel" (rebuilds a handle), "split" (splits a hole).
+    """
+
+    start: int
+    end: int
+    points: NDArray[np.float64]
+    quality: float
+    kind: str = "island"
+    candidate: int = -1  # index of the candidate line it came from
+
+    def polyline(self, vertices: NDArray[np.float64]) -> NDArray[np.float64]:
+        """(K+2, 3) the full chain A, interior..., B."""
+        return np.vstack([vertices[self.start], self.points, vertices[self.end]])
+
+
+@dataclass(frozen=True)
+class Hole:
+    """A closed walk: vertex indices (into the extended vertex array) in walking order, and
+    the bridges it used as (bridge index, +1 forward / -1 backward)."""
+
+    polygon: tuple[int, ...]
+    bridges: tuple[tuple[int, int], ...] = ()
+    parent: int = -1  # for holes made by splitting: the hole they came from
+
+    @property
+    def is_disk(self) -> bool:
+        ids = [b for b, _ in self.bridges]
+        return len(ids) == len(set(ids))
+
+
+def resample_chain(polyline: NDArray[np.float64], spacing: float) -> NDArray[np.float64]:
+    """Interior points of a polyline resampled at about ``spacing`` by arc length.
+
+    The end points are kept exactly (they are mesh vertices); returns only the interior.
+    """
+    p = np.asarray(polyline, dtype=np.float64)
+    seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    total = float(seg.sum())
+    if total <= 0 or spacing <= 0:
+        return np.zeros((0, 3))
+    n = max(1, int(round(total / spacing)))
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    t = np.linspace(0.0, total, n + 1)[1:-1]
+    return np.stack([np.interp(t, s, p[:, k]) for k in range(3)], axis=1)
+
+
+def _dense(polyline: NDArray[np.float64], spacing: float) -> NDArray[np.float64]:
+    p = np.asarray(polyline, dtype=np.float64)
+    inner = resample_chain(p, spacing)
+    return np.vstack([p[:1], inner, p[-1:]])
+
+
+@dataclass(frozen=True)
+class ConflictRules:
+    """Thresholds of the conflict resolution (lengths in model units)."""
+
+    clearance: float  # two bridges may not come closer than this (away from shared ends)
+    neighbourhood: float  # two bridges between the same loops with both ends this close duplicate
+    endpoint_gap: int = 2  # kept bridges' endpoints must be at least this many loop steps apart
+
+
+@dataclass
+class GraphState:
+    """Bridges kept so far and what is needed to test a new one against them."""
+
+    vertices: NDArray[np.float64]
+    loop_of: dict[int, tuple[int, int]]  # vertex -> (loop index, position in loop)
+    loop_sizes: list[int]
+    rules: ConflictRules
+    kept: list[Bridge] = field(default_factory=list)
+    _samples: list[NDArray[np.float64]] = field(default_factory=list)
+    _owner: list[NDArray[np.int64]] = field(default_factory=list)
+
+    def conflict(self, b: Bridge) -> str | None:
+        """Why ``b`` conflicts with the kept bridges, or None."""
+        if b.start == b.end:
+            return "starts and ends at the same vertex"
+        la, ia = self.loop_of[b.start]
+        lb, ib = self.loop_of[b.end]
+        for k in self.kept:
+            for v in (b.start, b.end):
+                for w in (k.start, k.end):
+                    lv, iv = self.loop_of[v]
+                    lw, iw = self.loop_of[w]
+                    if lv == lw:
+                        d = abs(iv - iw)
+                        d = min(d, self.loop_sizes[lv] - d)
+                        if d < self.rules.endpoint_gap:
+                            return f"shares an endpoint neighbourhood with bridge {k.start}-{k.end}"
+            ka, kb = self.loop_of[k.start][0], self.loop_of[k.end][0]
+            if {ka, kb} == {la, lb}:
+                pa, pb = self.vertices[b.start], self.vertices[b.end]
+                qa, qb = self.vertices[k.start], self.vertices[k.end]
+                if ka != la:
+                    qa, qb = qb, qa
+                if (np.linalg.norm(pa - qa) < self.rules.neighbourhood
+                        and np.linalg.norm(pb - qb) < self.rules.neighbourhood):
+                    return f"duplicates bridge {k.start}-{k.end} in the same neighbourhood"
+        if self.kept:
+            pts = _dense(b.polyline(self.vertices), self.rules.clearance / 2)
+            inner = pts[1:-1] if len(pts) > 2 else pts[:0]
+            if len(inner):
+                allp = np.vstack(self._samples)
+                tree = cKDTree(allp)
+                d, _ = tree.query(inner, k=1)
+                if (d < self.rules.clearance).any():
+                    return "crosses or runs too close to a kept bridge"
+        return None
+
+    def add(self, b: Bridge) -> None:
+        pts = _dense(b.polyline(self.vertices), self.rules.clearance / 2)
+        self.kept.append(b)
+        self._samples.append(pts[1:-1] if len(pts) > 2 else pts)
+
+
+def walk_holes(loops: list[NDArray[np.int64]], bridges: list[Bridge],
+               chains: list[NDArray[np.int64]]) -> list[Hole]:
+    """Holes bounded by the loops and the bridges, by the walking rule (spec §6 step 1).
+
+    loops: boundary loops (vertex indices, positive direction). bridges: with at most one
+    bridge per vertex. chains: for each bridge, the vertex indices of its interior points in the
+    extended vertex array, in order from start to end.
+    Loops that no bridge touches come out unchanged as holes of their own.
+    """
+    nxt: dict[int, int] = {}
+    for lp in loops:
+        lp = [int(x) for x in lp]
+        for a, b in zip(lp, lp[1:] + lp[:1]):
+            nxt[a] = b
+    at: dict[int, tuple[int, int]] = {}
+    for k, br in enumerate(bridges):
+        if br.start in at or br.end in at:
+            raise ValueError(f"two bridges meet at vertex {br.start if br.start in at else br.end}")
+        at[br.start] = (k, +1)
+        at[br.end] = (k, -1)
+    used: set[int] = set()  # boundary darts by start vertex
+    holes: list[Hole] = []
+    for lp in loops:
+        for v0 in (int(x) for x in lp):
+            if v0 in used:
+                continue
+            poly: list[int] = []
+            used_bridges: list[tuple[int, int]] = []
+            v = v0
+            for _ in range(len(nxt) + 2 * sum(len(c) + 1 for c in chains) + 2):
+                # traverse the boundary dart v -> nxt[v]
+                used.add(v)
+                poly.append(v)
+                u = nxt[v]
+                if u in at:
+                    # arrived at a bridge vertex along the boundary: take the bridge
+                    k, sign = at[u]
+                    poly.append(u)
+                    chain = chains[k] if sign > 0 else chains[k][::-1]
+                    poly.extend(int(c) for c in chain)
+                    used_bridges.append((k, sign))
+                    w = bridges[k].end if sign > 0 else bridges[k].start
+                    # on arriving, continue along the arrival loop: the dart w -> nxt[w]
+                    v = w
+                else:
+                    v = u
+                if v == v0 or v in used:
+                    break
+            holes.append(Hole(tuple(poly), tuple(used_bridges)))
+    return holes
+
+
+def split_polygon(polygon: tuple[int, ...], i: int, j: int,
+                  chain: NDArray[np.int64]) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """Split a hole polygon by a chain from polygon[i] to polygon[j] (interior vertices).
+
+    Each half walks the chain once, in opposite directions, so the two patches share it.
+    """
+    n = len(polygon)
+    if i == j:
+        raise ValueError("a split chain must join two different polygon vertices")
+    seq1 = [polygon[(i + k) % n] for k in range(((j - i) % n) + 1)]  # p_i .. p_j
+    seq2 = [polygon[(j + k) % n] for k in range(((i - j) % n) + 1)]  # p_j .. p_i
+    c = [int(x) for x in chain]
+    return tuple(seq1 + c[::-1]), tuple(seq2 + c)

@@ -1,0 +1,233 @@
+"""Darning: filling a simple hole of a mesh with a patch (one implementation, shared by the repair
+pipeline, spec/repair.md §6 step 4, and the F-rep triangulator, spec/frep.md §4).
+
+Methods (the names the command line uses, ``--darning``):
+
+- ``fan``: the paper's centroid fan (repair.md §6.4): one new vertex at the centroid of the loop,
+  one triangle per loop edge. Cheap, poor triangles on long or non-convex holes.
+- ``liepa``: the minimum-weight triangulation of the loop (O(n^3) dynamic programming,
+  frep.md §4), no new vertices. ``weight`` = "area" (default), "length" (minimum total edge
+  length) or "dihedral" (Liepa's max-dihedral-angle-then-area weight).
+- ``liepa-refine``: ``liepa``, then refinement (centroid splits at the surrounding edge-length
+  scale + Delaunay edge flips) so that the patch's density and triangle shapes match the
+  surroundings; the new vertices lie in the flat triangulation.
+- ``liepa-fair`` (default, the best): ``liepa-refine``, then fairing: the new vertices solve
+  U_k = 0 with the hole border and the rings outside it fixed, so the patch continues the
+  surrounding curvature. The spec's fairing is U2 = 0 (bi-Laplacian, uniform weights:
+  ``fairing="U2", fair_weights="uniform"``); the default is U3 = 0 with cotangent weights followed
+  by a tangential relaxation and edge flips (measured best, see :func:`darn`). ``fairing="U1"``
+  is the umbrella (membrane) variant.
+
+Orientation: a loop is given in its positive direction (the surrounding surface has a face with
+half-edge a -> b for every loop edge a -> b, as :func:`algorithms.topology.boundary_loops`
+returns it); every patch face holds b -> a, so the filled mesh is consistently oriented.
+Input faces are never changed; new vertices are appended after the input's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..mesh import Mesh
+from ..topology import boundary_halfedges, boundary_loops, halfedges
+from .fair import ORDERS, WEIGHTINGS, fair, tangential_relax
+from .fan import fan
+from .liepa import WEIGHTS, triangulate
+from .refine import edge_scale, refine, relax
+
+METHODS = ("fan", "liepa", "liepa-refine", "liepa-fair")
+DEFAULT_METHOD = "liepa-fair"
+FAIRINGS = ("U2", "U1", "U3")
+
+__all__ = ["METHODS", "DEFAULT_METHOD", "WEIGHTS", "FAIRINGS", "Patch", "darn", "fill_holes", "apply_patch",
+           "triangulate", "fan", "refine", "relax", "fair"]
+
+
+def _ro(a: NDArray, dtype: type) -> NDArray:
+    out = np.array(a, dtype=dtype, copy=True)
+    out.setflags(write=False)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Patch:
+    """The filling of one hole.
+
+    new_vertices: (K, 3), to be appended after the V vertices the patch was made for (vertex
+        numbers V .. V+K-1).
+    faces: (M, 3) indices into the combined vertex array (input vertices then new_vertices).
+    loop: (L,) the hole's loop as given. method, weight: how it was made.
+    splits, flips: refinement counts (0 without refinement).
+    """
+
+    new_vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    loop: NDArray[np.int64]
+    method: str
+    weight: str
+    splits: int = 0
+    flips: int = 0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "new_vertices", _ro(np.reshape(self.new_vertices, (-1, 3)), np.float64))
+        object.__setattr__(self, "faces", _ro(np.reshape(self.faces, (-1, 3)), np.int64))
+        object.__setattr__(self, "loop", _ro(self.loop, np.int64))
+
+
+def apply_patch(vertices: NDArray[np.float64], faces: NDArray[np.int64],
+                patch: Patch) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """(vertices + patch.new_vertices, faces + patch.faces)."""
+    return (np.vstack([np.asarray(vertices, dtype=np.float64), patch.new_vertices]),
+            np.vstack([np.asarray(faces, dtype=np.int64).reshape(-1, 3), patch.faces]))
+
+
+def _check(method: str, weight: str, fairing: str, fair_weights: str) -> None:
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if weight not in WEIGHTS:
+        raise ValueError(f"weight must be one of {WEIGHTS}, got {weight!r}")
+    if fairing not in FAIRINGS:
+        raise ValueError(f"fairing must be one of {FAIRINGS}, got {fairing!r}")
+    if fair_weights not in WEIGHTINGS:
+        raise ValueError(f"fair_weights must be one of {WEIGHTINGS}, got {fair_weights!r}")
+
+
+def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[np.int64], *,
+         method: str = DEFAULT_METHOD, weight: str = "area", density: float = float(np.sqrt(2.0)),
+         fairing: str = "U3", fair_weights: str = "cotan", fair_rounds: int = 2, smooth: int = 5,
+         fair_iterations: int = 1,
+         forbid_existing: bool = True) -> Patch:
+    """Fill the hole bounded by ``loop`` (vertex indices in the loop's positive direction).
+
+    vertices (V, 3), faces (F, 3): the surface around the hole (never modified).
+    method: one of ``METHODS`` (module docstring). weight: the Liepa weight (``WEIGHTS``).
+    density: alpha of the refinement's split test (refine.py).
+    fairing, fair_weights: the fairing system (fair.py). The spec's is U2 = 0 with uniform weights
+        (``fairing="U2", fair_weights="uniform"``); the default **(choice)** is U3 = 0 with
+        cotangent weights, which continues the surrounding curvature far better. Measured on a unit
+        sphere with a 62 degree cap removed (Hausdorff to the sphere, % of the diagonal / min patch
+        angle): U2 uniform 3.8 % / 26 deg, U2 cotan 3.0 % / 10 deg, U3 uniform 1.05 % / 29 deg,
+        U3 cotan + smoothing 0.15 % / 24 deg.
+    fair_rounds: for ``liepa-fair``, how many times refine -> fair runs; rounds after the first
+        refine the faired (now curved, larger) patch again, fair it and relax its edges (U2 uniform
+        on a 35 degree cap: Hausdorff 1.25 % -> 0.49 % of the diagonal).
+    fair_iterations: how often cotangent weights are recomputed from the positions within one
+        fairing (1: from the refined patch; more rounds change the result little, measured).
+    smooth: iterations of tangential relaxation after each fairing (fair.tangential_relax: evens
+        out the vertices along the surface; cotangent fairing alone leaves slivers), then edge flips.
+    forbid_existing: chords that already are edges of the surface are not used (they would be
+        non-manifold); if every triangulation needs one, the unconstrained optimum is taken.
+    """
+    _check(method, weight, fairing, fair_weights)
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    lp = np.asarray(loop, dtype=np.int64).ravel()
+    n = len(lp)
+    if n < 3:
+        raise ValueError(f"a hole needs at least 3 vertices, got {n}")
+    if lp.min() < 0 or lp.max() >= len(v):
+        raise ValueError("loop vertex index out of range")
+    nv = len(v)
+    ring = f[np.isin(f, lp).any(axis=1)]  # the fixed faces touching the hole border
+    if method == "fan":
+        c, lf = fan(v[lp])
+        glob = np.r_[lp, nv]
+        return Patch(c[None, :], glob[lf], lp, method, weight)
+
+    forbidden = None
+    pos = np.full(nv, -1, dtype=np.int64)
+    pos[lp] = np.arange(n)
+    if forbid_existing and len(ring):
+        he = halfedges(ring)
+        both = (pos[he[:, 0]] >= 0) & (pos[he[:, 1]] >= 0)
+        if both.any():
+            forbidden = np.zeros((n, n), dtype=bool)
+            a, b = pos[he[both, 0]], pos[he[both, 1]]
+            forbidden[a, b] = True
+            forbidden[b, a] = True
+    normals = None
+    if weight == "dihedral":
+        normals = _outside_normals(v, ring, lp)
+    lf = triangulate(v[lp], weight=weight, forbidden=forbidden, outside_normals=normals)
+    patch_faces = lp[lf]
+    if method == "liepa":
+        return Patch(np.zeros((0, 3)), patch_faces, lp, method, weight)
+    if fair_rounds < 1:
+        raise ValueError(f"fair_rounds must be >= 1, got {fair_rounds}")
+    if smooth < 0:
+        raise ValueError(f"smooth must be >= 0, got {smooth}")
+    # l(v) (frep.md §4): mean length of v's edges outside the patch; a loop vertex without any
+    # (e.g. on a bridge chain, whose other side is not filled yet) takes its two loop edges' mean
+    scale = edge_scale(v, ring, nv)
+    ln = np.linalg.norm(v[np.roll(lp, -1)] - v[lp], axis=1)  # loop edge j = (lp[j], lp[j+1])
+    loop_mean = (ln + np.roll(ln, 1)) / 2
+    scale[lp] = np.where(np.isfinite(scale[lp]), scale[lp], loop_mean)
+    r = refine(v, ring, patch_faces, density=density, scale=scale)
+    P, pf, splits, flips = r.vertices, r.faces, r.splits, r.flips
+    # the fixed faces the fairing reads: L^k at a patch vertex reads L up to k-1 rings out, so U2
+    # needs the faces around the loop, U3 also those around their vertices
+    around = ring
+    for _ in range(ORDERS[fairing] - 2):
+        around = f[np.isin(f, around).any(axis=1)]
+    # vertices whose neighbourhood is incomplete in (around + patch): the far side of `around`, and
+    # loop vertices on bridge chains whose other side is not filled yet (fair.py "bare")
+    bare = np.unique(boundary_halfedges(np.vstack([around, patch_faces])))
+    if method == "liepa-fair" and len(P) > nv:
+        for k in range(fair_rounds):  # sequential: each round refines the previous round's surface
+            if k:
+                s2 = np.concatenate([scale, np.full(len(P) - nv, np.nan)])  # new vertices: the loop's mean
+                r = refine(P, ring, pf, density=density, scale=s2)
+                P, pf = r.vertices, r.faces
+                splits += r.splits
+                flips += r.flips
+            free = np.arange(nv, len(P))
+            P = fair(P, np.vstack([around, pf]), free, operator=fairing, weights=fair_weights, bare=bare,
+                     iterations=fair_iterations)
+            if smooth:
+                P = tangential_relax(P, np.vstack([around, pf]), free, iterations=smooth)
+            if k or smooth:
+                pf, nflip = relax(P, pf, ring)
+                flips += nflip
+    return Patch(P[nv:], pf, lp, method, weight, splits, flips)
+
+
+def _outside_normals(v: NDArray[np.float64], ring: NDArray[np.int64], lp: NDArray[np.int64]) -> NDArray[np.float64]:
+    """(n, 3) normal of the surrounding face holding loop half-edge lp[j] -> lp[j+1] (zero if none)."""
+    n = len(lp)
+    out = np.zeros((n, 3))
+    if not len(ring):
+        return out
+    nv = len(v)
+    he = halfedges(ring)
+    key = he[:, 0] * nv + he[:, 1]
+    order = np.argsort(key)
+    want = lp * nv + np.roll(lp, -1)
+    i = np.minimum(np.searchsorted(key[order], want), len(key) - 1)
+    hit = key[order][i] == want
+    fo = ring[order[i] // 3]
+    t = v[fo]
+    nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    out[hit] = nrm[hit]
+    return out
+
+
+def fill_holes(mesh: Mesh, loops: list[NDArray[np.int64]] | None = None, *, method: str = DEFAULT_METHOD,
+               **options: object) -> tuple[Mesh, list[Patch]]:
+    """Darn every loop (default: every boundary loop of the mesh) one after another.
+
+    Patch i is made for (and indexes) the mesh with patches 0..i-1 already applied, so applying
+    them in order with :func:`apply_patch` reproduces the returned mesh. ``options`` go to
+    :func:`darn`.
+    """
+    v = np.asarray(mesh.vertices)
+    f = np.asarray(mesh.faces)
+    todo = boundary_loops(f) if loops is None else loops
+    patches: list[Patch] = []
+    for lp in todo:  # sequential: each patch is made on the mesh the previous ones completed
+        p = darn(v, f, lp, method=method, **options)  # type: ignore[arg-type]
+        v, f = apply_patch(v, f, p)
+        patches.append(p)
+    return Mesh(v, f), patches

@@ -1,0 +1,187 @@
+"""Fairing a patch: U1 = 0 (membrane) or U2 = 0 (thin plate) with uniform weights
+(spec/frep.md §4 "Matching the curvature").
+
+    U1(p) = -p + (1/n(p)) sum_i p_i                        (umbrella operator)
+    U2(p) = -U1(p) + (1/n(p)) sum_i U1(p_i)                (as written in frep.md §4)
+
+With L = D^-1 A - I (uniform weights, A the vertex adjacency), U1 = L x and, since the spec's
+U2 = -U1 + mean U1(p_i) = (D^-1 A - I) U1, U2 = L (L x). For the free (patch-interior) vertices we
+solve U = 0 with every other vertex fixed:
+
+    (L^k)[free, free] x_free = -(L^k)[free, fixed] x_fixed,     k = 1 (U1) or 2 (U2),
+
+one sparse solve for the three coordinates (scipy.sparse.linalg.splu). The rows of L^2 at a free
+vertex reach two rings out, so the hole border and one ring of fixed vertices beyond it act as
+the boundary condition (positions and tangents). The spec's iteration "solve, move, repeat"
+converges to this same fixed point; with uniform weights it is reached in one solve.
+
+**(choice)** ``weights="cotan"``: the same system with the area-normalised cotangent Laplacian
+L = M^-1 (C - diag C1) (M the barycentric vertex areas), whose weights are computed from the
+current positions and refreshed ``iterations`` times. Uniform weights pull the vertices towards
+the patch's combinatorial centre, which on a curved hole of irregular density leaves the patch
+flatter than the surroundings; cotangent weights follow the geometry (measured on a sphere cap
+of 35 degrees: max radial error 0.042 uniform, 0.010 cotangent).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+from scipy.sparse.linalg import splu
+
+from ..topology import edge_table
+
+ORDERS = {"umbrella": 1, "U1": 1, "bilaplacian": 2, "U2": 2, "trilaplacian": 3, "U3": 3}
+WEIGHTINGS = ("uniform", "cotan")
+
+
+def uniform_laplacian(n_vertices: int, faces: NDArray[np.int64]) -> sp.csr_matrix:
+    """L = D^-1 A - I over the vertices; rows of vertices without edges are zero."""
+    e = edge_table(np.asarray(faces, dtype=np.int64)).edges
+    A = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
+                      shape=(n_vertices, n_vertices)).tocsr()
+    deg = np.asarray(A.sum(axis=1)).ravel()
+    inv = np.divide(1.0, deg, out=np.zeros_like(deg), where=deg > 0)
+    has = (deg > 0).astype(np.float64)
+    return (sp.diags(inv) @ A - sp.diags(has)).tocsr()
+
+
+def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> sp.csr_matrix:
+    """L = M^-1 (C - diag(C 1)): C_ab = (cot alpha + cot beta) / 2 over the faces at edge ab,
+    M the barycentric area (a third of the incident faces' area). Cotangents are clipped to
+    [-1e3, 1e3] and areas floored so that degenerate input triangles cannot break the system."""
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64)
+    n = len(v)
+    t = v[f]
+    dbl = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)  # twice the area
+    floor = max(float(dbl.max()) * 1e-12, 1e-300) if len(dbl) else 1.0
+    rows, cols, vals = [], [], []
+    for k in range(3):  # the corner k is opposite the edge (k+1, k+2)
+        u = t[:, (k + 1) % 3] - t[:, k]
+        w = t[:, (k + 2) % 3] - t[:, k]
+        cot = np.clip(np.einsum("ij,ij->i", u, w) / np.maximum(dbl, floor), -1e3, 1e3)
+        a, b = f[:, (k + 1) % 3], f[:, (k + 2) % 3]
+        rows += [a, b]
+        cols += [b, a]
+        vals += [cot / 2, cot / 2]
+    C = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
+    area = np.bincount(f.ravel(), weights=np.repeat(dbl / 6, 3), minlength=n)
+    has = area > 0
+    inv = np.divide(1.0, area, out=np.zeros(n), where=has)
+    return (sp.diags(inv) @ (C - sp.diags(np.asarray(C.sum(axis=1)).ravel()))).tocsr()
+
+
+def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
+         operator: str = "U2", weights: str = "uniform", iterations: int = 2,
+         bare: NDArray[np.int64] | None = None) -> NDArray[np.float64]:
+    """New positions (V, 3) with the ``free`` vertices moved so that U1 = 0 or U2 = 0 there.
+
+    faces must hold every face around the free vertices and, for U2, every face around their
+    neighbours (the hole border's outer ring), e.g. the whole mesh.
+    operator: "U2"/"bilaplacian" (default), "U1"/"umbrella", or "U3"/"trilaplacian" (L^3 x = 0:
+        continues the curvature of the surroundings; needs two fixed rings around the free vertices;
+        measured on the big-hole demo, a 62 degree cap of the unit sphere filled after repair:
+        Hausdorff 3.0 % of the diagonal with U2, 0.35 % with U3, both cotangent weights).
+    weights: "uniform" (the spec's) or "cotan" (recomputed ``iterations`` times).
+    bare: fixed vertices whose own neighbourhood is missing (e.g. a bridge chain whose other side
+        is not filled yet): L at such a vertex is meaningless, so a free vertex j rings from one
+        solves L^min(k, j) x = 0 (next to a bare vertex U1 = 0: positions only as the boundary
+        condition there).
+    """
+    if operator not in ORDERS:
+        raise ValueError(f"operator must be one of {sorted(ORDERS)}, got {operator!r}")
+    if weights not in WEIGHTINGS:
+        raise ValueError(f"weights must be one of {WEIGHTINGS}, got {weights!r}")
+    if iterations < 1:
+        raise ValueError(f"iterations must be >= 1, got {iterations}")
+    v = np.asarray(vertices, dtype=np.float64)
+    free = np.unique(np.asarray(free, dtype=np.int64))
+    out = v.copy()
+    if not len(free):
+        return out
+    is_free = np.zeros(len(v), dtype=bool)
+    is_free[free] = True
+    fixed = np.flatnonzero(~is_free)
+    for _ in range(1 if weights == "uniform" else iterations):  # sequential: cotan weights follow the positions
+        L = uniform_laplacian(len(v), faces) if weights == "uniform" else cotan_laplacian(out, faces)
+        k = ORDERS[operator]
+        powers = [L]
+        for _ in range(k - 1):  # L^k: k = 3 also matches curvature across the border
+            powers.append((powers[-1] @ L).tocsr())
+        rows = powers[-1][free]
+        if k > 1 and bare is not None and len(bare):
+            # the row of L^j at f reads L at the vertices up to j-1 rings from f: a free vertex j
+            # rings from a bare vertex solves L^min(k, j) = 0
+            adj = (abs(L) + abs(L.T)) > 0
+            dist = np.full(len(v), k, dtype=np.int64)
+            front = np.zeros(len(v), dtype=bool)
+            front[np.asarray(bare, dtype=np.int64)] = True
+            seen = front.copy()
+            for j in range(1, k):  # sequential: ring after ring
+                front = (adj @ front.astype(np.float64) > 0) & ~seen
+                dist[front] = j
+                seen |= front
+            order = dist[free]
+            if (order < k).any():
+                rows = _mixed_rows(powers, free, order)
+        rhs = -(rows[:, fixed] @ out[fixed])
+        out[free] = _solve(rows[:, free].tocsr(), rhs, out[free])
+    return out
+
+
+def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A x = rhs by sparse LU. A free vertex whose row vanished (all its faces degenerate) keeps its
+    position; a system that is still singular (a free region with no path to a fixed vertex) is
+    solved with a tiny diagonal shift towards the current positions."""
+    zero = np.asarray(abs(A).sum(axis=1)).ravel() == 0
+    if zero.any():
+        A = (A + sp.diags(zero.astype(np.float64))).tocsr()
+        rhs = np.where(zero[:, None], x0, rhs)
+    try:
+        return splu(A.tocsc()).solve(rhs)
+    except RuntimeError:  # exactly singular
+        eps = 1e-9 * float(abs(A).max())
+        return splu((A + eps * sp.identity(A.shape[0])).tocsc()).solve(rhs + eps * x0)
+
+
+def _mixed_rows(powers: list[sp.csr_matrix], free: NDArray[np.int64], order: NDArray[np.int64]) -> sp.csr_matrix:
+    """Rows of L^order[i] at free[i], stacked in the order of ``free``."""
+    parts, where = [], []
+    for j in range(1, len(powers) + 1):
+        sel = np.flatnonzero(order == j)
+        if len(sel):
+            parts.append(powers[j - 1][free[sel]])
+            where.append(sel)
+    stacked = sp.vstack(parts).tocsr()
+    pos = np.concatenate(where)
+    inv = np.empty_like(pos)
+    inv[pos] = np.arange(len(pos))
+    return stacked[inv]
+
+
+def tangential_relax(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
+                     iterations: int = 5, step: float = 0.5) -> NDArray[np.float64]:
+    """Even out the free vertices along the surface: each moves ``step`` of the way towards the
+    centroid of its neighbours, with the component along its normal removed (a tangential umbrella
+    step; the shape changes only to second order). Used after cotangent fairing, which places
+    vertices accurately on the surface but unevenly."""
+    v = np.array(vertices, dtype=np.float64, copy=True)
+    f = np.asarray(faces, dtype=np.int64)
+    free = np.unique(np.asarray(free, dtype=np.int64))
+    if not len(free) or not len(f):
+        return v
+    L = uniform_laplacian(len(v), f)[free]
+    for _ in range(iterations):  # sequential: each step starts from the previous positions
+        t = v[f]
+        fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        vn = np.zeros_like(v)
+        for k in range(3):
+            np.add.at(vn, f[:, k], fn)
+        n = vn[free]
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        d = L @ v  # centroid of the neighbours minus the vertex
+        d -= np.einsum("ij,ij->i", d, n)[:, None] * n
+        v[free] += step * d
+    return v

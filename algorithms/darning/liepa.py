@@ -1,0 +1,209 @@
+"""Minimum-weight triangulation of a hole polygon (Liepa 2003; spec/frep.md §4 "Filling").
+
+The hole polygon v_0 ... v_{n-1} (a closed loop in 3-D) is triangulated by dynamic programming:
+
+    W_{i,i+1} = 0
+    W_{i,k}   = min_{i<m<k}  W_{i,m} + W_{m,k} + weight(v_i, v_m, v_k)        (frep.md §4)
+
+remembering the argmin M_{i,k}, then the faces are rebuilt from M starting at (0, n-1). The DP
+runs over the diagonals d = k - i (a sequential dependency: W on diagonal d needs all shorter
+diagonals); on one diagonal every (i, k) and every m are computed at once with numpy, so the
+Python loop has n iterations and the work is the O(n^3) of the method in vectorised form.
+
+Weights: ``"area"`` (triangle area, the minimal-area patch), ``"length"`` (the triangle's
+perimeter: summed over a triangulation it is twice the interior edge length plus the fixed loop
+length, so this is the minimum total edge length), and ``"dihedral"``: Liepa's weight, the pair
+(largest dihedral angle between adjacent triangles, including the surrounding faces across the
+loop edges; total area), compared lexicographically (max for the angle, sum for the area).
+
+Chords that already are edges of the surrounding surface can be forbidden (they would become
+non-manifold edges); they get an infinite weight.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+WEIGHTS = ("area", "length", "dihedral")
+_ANGLE_TOL = 1e-6  # radians: max-angles closer than this are ties, the area decides (Liepa's lexicographic order)
+
+
+def _tri_weight(a: NDArray, b: NDArray, c: NDArray, weight: str) -> NDArray:
+    if weight == "length":
+        return (np.linalg.norm(b - a, axis=-1) + np.linalg.norm(c - b, axis=-1) + np.linalg.norm(a - c, axis=-1))
+    return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=-1)
+
+
+def _angle(n1: NDArray, n2: NDArray) -> NDArray:
+    """Angle between (unnormalised) normals; 0 where one of them is degenerate."""
+    c = np.linalg.norm(np.cross(n1, n2), axis=-1)
+    d = np.einsum("...j,...j->...", n1, n2)
+    return np.arctan2(c, d)
+
+
+def triangulate(points: NDArray[np.float64], *, weight: str = "area",
+                forbidden: NDArray[np.bool_] | None = None,
+                outside_normals: NDArray[np.float64] | None = None) -> NDArray[np.int64]:
+    """Minimum-weight triangulation of a closed polygon.
+
+    points: (n, 3) the loop, n >= 3, in the loop's positive direction (the surrounding surface
+        has half-edge v_j -> v_{j+1}).
+    weight: one of ``WEIGHTS``.
+    forbidden: optional (n, n) bool, True for chords (i, k) that must not be used.
+    outside_normals: (n, 3) for ``"dihedral"``: the normal of the surrounding face across loop
+        edge j = (v_j, v_{j+1 mod n}); without it the loop edges add no angle term.
+
+    Returns (n-2, 3) local vertex indices, wound so that each face holds the loop edges reversed
+    (v_{j+1} -> v_j), i.e. consistently oriented with the surrounding surface.
+    """
+    if weight not in WEIGHTS:
+        raise ValueError(f"weight must be one of {WEIGHTS}, got {weight!r}")
+    p = np.asarray(points, dtype=np.float64)
+    n = len(p)
+    if n < 3:
+        raise ValueError(f"a hole needs at least 3 vertices, got {n}")
+    if forbidden is not None:
+        forbidden = np.asarray(forbidden, dtype=bool)
+        if forbidden.shape != (n, n):
+            raise ValueError(f"forbidden must be ({n}, {n}), got {forbidden.shape}")
+    if weight != "dihedral":
+        W00, M = _dp_fast(p, weight, forbidden)
+    else:
+        W00, M = _dp_dihedral(p, forbidden, outside_normals)
+    if not np.isfinite(W00):
+        if forbidden is not None and forbidden.any():
+            # every triangulation uses a forbidden chord: fall back to the unconstrained optimum
+            return triangulate(p, weight=weight, outside_normals=outside_normals)
+        raise ValueError("no finite-weight triangulation (non-finite coordinates?)")
+    return _rebuild(M, n)
+
+
+def _rebuild(M: NDArray[np.int64], n: int) -> NDArray[np.int64]:
+    """Faces from the argmin table, wound against the loop (patch side)."""
+    out = np.empty((n - 2, 3), dtype=np.int64)
+    stack = [(0, n - 1)]
+    t = 0
+    while stack:  # sequential: a walk down the DP's recursion tree
+        i, k = stack.pop()
+        if k - i < 2:
+            continue
+        m = int(M[i, k])
+        out[t] = (k, m, i)  # loop order (i, m, k) reversed
+        t += 1
+        stack.append((i, m))
+        stack.append((m, k))
+    return out
+
+
+def triangulation_weight(points: NDArray[np.float64], faces: NDArray[np.int64], *, weight: str = "area") -> float:
+    """Total weight (area or perimeter sum) of a triangulation of the polygon; for tests and reports."""
+    p = np.asarray(points, dtype=np.float64)
+    f = np.asarray(faces)
+    return float(_tri_weight(p[f[:, 0]], p[f[:, 1]], p[f[:, 2]], weight).sum())
+
+
+def _dp_fast(p: NDArray[np.float64], weight: str,
+             forbidden: NDArray[np.bool_] | None) -> tuple[float, NDArray[np.int64]]:
+    """The DP for the area and length weights, on skewed tables so that every gather is a slice.
+
+    S[i, j] = W_{i, i+j} and T[k, j] = W_{k-j, k}: for the diagonal d and row i (k = i + d) the
+    candidates m = i + j, j = 1..d-1, read W_{i,m} = S[i, j] (a row slice) and
+    W_{m,k} = T[k, d-j] (a reversed row slice). The triangle weight comes from tables of the same
+    layout: edge lengths, or pairwise cross products C_{a,b} = v_a x v_b with
+    (v_m - v_i) x (v_k - v_i) = C_{i,m} + C_{m,k} - C_{i,k} (coordinates centred first).
+    """
+    n = len(p)
+    q = p - p.mean(axis=0)
+    r = np.arange(n)
+    fwd = (r[:, None] + r[None, :]) % n  # fwd[i, j] = i + j
+    bwd = (r[:, None] - r[None, :]) % n  # bwd[k, j] = k - j
+    if weight == "length":
+        DS = np.linalg.norm(q[:, None, :] - q[fwd], axis=2)  # |v_i - v_{i+j}|
+        DT = DS[bwd, r[None, :]]  # |v_{k-j} - v_k|
+    else:
+        # one (n, n) table per coordinate keeps the row slices contiguous
+        CS = np.moveaxis(np.cross(q[:, None, :], q[fwd]), 2, 0).copy()  # v_i x v_{i+j}
+        CT = np.moveaxis(np.cross(q[bwd], q[:, None, :]), 2, 0).copy()  # v_{k-j} x v_k
+    S = np.full((n, n), np.inf)
+    T = np.full((n, n), np.inf)
+    S[:, 1] = 0.0
+    T[:, 1] = 0.0
+    M = np.full((n, n), -1, dtype=np.int64)
+    for d in range(2, n):  # sequential: diagonal d needs every shorter diagonal
+        rows = n - d
+        i = np.arange(rows)
+        k = i + d
+        cand = S[:rows, 1:d] + T[d:n, d - 1:0:-1]
+        if weight == "length":
+            cand = cand + DS[:rows, 1:d] + DT[d:n, d - 1:0:-1] + DS[:rows, d][:, None]
+        else:
+            sq = np.zeros_like(cand)
+            for c in range(3):  # the three coordinates of (v_m - v_i) x (v_k - v_i)
+                nc = CS[c, :rows, 1:d] + CT[c, d:n, d - 1:0:-1] - CS[c, :rows, d][:, None]
+                sq += nc * nc
+            cand = cand + 0.5 * np.sqrt(sq)
+        best = np.argmin(cand, axis=1)
+        w = cand[i, best]
+        if forbidden is not None and d < n - 1:
+            w = np.where(forbidden[i, k], np.inf, w)
+        S[i, d] = w
+        T[k, d] = w
+        M[i, k] = i + 1 + best
+    return float(S[0, n - 1]), M
+
+
+def _dp_dihedral(p: NDArray[np.float64], forbidden: NDArray[np.bool_] | None,
+                 outside_normals: NDArray[np.float64] | None) -> tuple[float, NDArray[np.int64]]:
+    """Liepa's weight: (max dihedral angle, area) compared lexicographically; max over the angle
+    terms, sum over the areas. The dihedral angle of the candidate triangle (i, m, k) is taken
+    against the triangles already chosen for the sub-polygons (i, m) and (m, k), or against the
+    surrounding face across a loop edge."""
+    n = len(p)
+    W = np.full((n, n), np.inf)
+    A = np.full((n, n), np.inf)  # max dihedral angle inside the sub-polygon i..k
+    M = np.full((n, n), -1, dtype=np.int64)
+    idx = np.arange(n - 1)
+    W[idx, idx + 1] = 0.0
+    A[idx, idx + 1] = 0.0
+    # neighbour normal across loop edge (j, j+1) in the DP's loop-order convention (triangle
+    # (i, m, k), i<m<k, has normal (v_m - v_i) x (v_k - v_i), the reverse of the patch face's):
+    # the surrounding face's normal, negated.
+    nb = None if outside_normals is None else -np.asarray(outside_normals, dtype=np.float64)
+    for d in range(2, n):  # sequential: diagonal d needs every shorter diagonal
+        i = np.arange(0, n - d)
+        k = i + d
+        m = i[:, None] + np.arange(1, d)[None, :]  # (rows, d-1)
+        ii = np.broadcast_to(i[:, None], m.shape)
+        kk = np.broadcast_to(k[:, None], m.shape)
+        pi, pm, pk = p[ii], p[m], p[kk]
+        cand = W[ii, m] + W[m, kk] + _tri_weight(pi, pm, pk, "area")
+        nt = np.cross(pm - pi, pk - pi)
+        ang = np.maximum(A[ii, m], A[m, kk])
+        # across (i, m): the triangle chosen for sub-polygon (i, m), or the surrounding face
+        q = M[ii, m]
+        inner = q >= 0
+        n_im = np.cross(p[np.where(inner, q, m)] - pi, pm - pi)
+        if nb is not None:
+            n_im = np.where(inner[..., None], n_im, nb[ii])
+        ang = np.maximum(ang, np.where(inner | (nb is not None), _angle(nt, n_im), 0.0))
+        q = M[m, kk]
+        inner = q >= 0
+        n_mk = np.cross(p[np.where(inner, q, kk)] - pm, pk - pm)
+        if nb is not None:
+            n_mk = np.where(inner[..., None], n_mk, nb[m])
+        ang = np.maximum(ang, np.where(inner | (nb is not None), _angle(nt, n_mk), 0.0))
+        if d == n - 1 and nb is not None:  # the closing loop edge (v_{n-1}, v_0)
+            ang = np.maximum(ang, _angle(nt, np.broadcast_to(nb[n - 1], nt.shape)))
+        ang = np.where(np.isfinite(cand), ang, np.inf)
+        amin = ang.min(axis=1, keepdims=True)
+        best = np.argmin(np.where(ang <= amin + _ANGLE_TOL, cand, np.inf), axis=1)
+        rr = np.arange(len(i))
+        W[i, k] = cand[rr, best]
+        A[i, k] = ang[rr, best]
+        M[i, k] = m[rr, best]
+        if forbidden is not None and d < n - 1:
+            bad = forbidden[i, k]
+            W[i[bad], k[bad]] = np.inf
+            A[i[bad], k[bad]] = np.inf
+    return float(W[0, n - 1]), M

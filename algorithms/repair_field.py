@@ -1,0 +1,168 @@
+"""The force-line questions the repair pipeline asks the field (spec/repair.md §6 steps 1-3).
+
+island_lines: candidate bridges between islands (step 1).
+tunnel_lines: lines between the loops of one island and the tunnel rule (step 2).
+split_line: a force line across one complex hole, from its point of maximal attraction (step 3).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .boundary import LoopFrame
+from .bridges import (
+    FieldContext,
+    _edges,
+    attraction_index,
+    auto_lc,
+    find_candidate_bridges,
+    local_maxima,
+    loop_radius,
+    trace_in_loop,
+)
+from .field.free_points import free_points
+from .field.indicator import IndicatorField, sources_from_frames, top_normal
+from .field.protocol import Biaf
+from .field.shielding import mesh_bvh
+from .force_lines import make_targets, trace
+from .mesh import Icadm
+from .params import FieldParams
+from .records import Cancelled, ForceLine
+
+
+@dataclass(frozen=True, eq=False)
+class LineSet:
+    lc: float
+    lines: tuple[ForceLine, ...]  # the lines that become bridge candidates
+    all_lines: tuple[ForceLine, ...]  # every line traced (for the record)
+    note: str = ""
+
+
+def island_lines(model: Icadm, params: FieldParams, *, progress: Callable[[float, str], None] | None = None,
+                 cancel: Callable[[], bool] | None = None) -> LineSet:
+    """Step 1: for each island as base, lines from the local maxima of its attraction index."""
+    bs = find_candidate_bridges(model, params, progress=progress, cancel=cancel)
+    lines = tuple(c.line for c in bs.candidates)
+    return LineSet(bs.lc, tuple(ln for ln in lines if ln.arrived), lines)
+
+
+def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], params: FieldParams, *,
+                 force: bool = False, cancel: Callable[[], bool] | None = None, starts_per_loop: int = 6,
+                 exclude_fraction: float = 0.2) -> LineSet:
+    """Step 2 (ICMT): force lines among the given non-trivial boundaries.
+
+    Sources: all the given loops, the start's own loop included except a neighbourhood of the
+    start (exclude_fraction of the loop on each side), so that a line may cross its own hole
+    (the loop should simply be capped) or reach another loop (a lost handle): both compete in
+    one field. L_c for lines from loop k: max(its mean radius, the mean distance between the
+    boundaries), spec §6's two characteristic values. Start points: the local maxima of Omega,
+    completed by evenly spaced points, ``starts_per_loop`` per loop.
+
+    Loops i and j are joined by a tunnel when two or more lines connect them and, from each of the
+    two loops, every line to the other one has a quality above every other line from that loop.
+    ``force`` (tunnels "on") accepts the best connected pair without that comparison.
+    """
+    sel = [frames[k] for k in loop_ids]
+    src = sources_from_frames(sel, loop_ids=loop_ids, group="loop")
+    if len(sel) < 2:
+        return LineSet(0.0, (), ())
+    lc_inter = auto_lc(src)
+    edge = _edges(tuple(sel))
+    pos_in = {int(v): k for k in loop_ids for v in frames[k].vertices}
+    bvh = mesh_bvh(model.mesh) if params.shielding and model.mesh.n_faces else None
+    every: list[ForceLine] = []
+    from_loop: dict[int, list[tuple[int, ForceLine]]] = {}
+    for k in loop_ids:
+        fr = frames[k]
+        n = len(fr.vertices)
+        lc = float(params.lc) if params.lc is not None else max(loop_radius(fr), lc_inter)
+        p = replace(params, lc=lc, step=params.step if params.step is not None else params.step_factor * lc)
+        fp = (free_points(model.free_points, kt=p.kt, rc=p.rc_factor * lc, kernel=p.g_kernel)
+              if p.use_free_points and len(model.free_points) else None)
+        win = int(round(exclude_fraction * n))
+        mine = src.loop == k
+        ev = IndicatorField(src, p, lc, bvh=bvh, free=fp).evaluate(
+            fr.points, x_vertex=fr.vertices, x_loop=np.full(n, k), x_pos=np.arange(n), x_window=np.full(n, win))
+        nrm, ten = top_normal(ev.H, fr.tangent, fr.normal)  # (16a)
+        f = np.einsum("nij,nj->ni", ev.H, nrm)
+        omega = np.where((f * fr.outward).sum(axis=1) > 0, ten, 0.0)  # attraction index
+        mx = local_maxima(omega)
+        starts = [int(i) for i in mx[np.argsort(-omega[mx])][:starts_per_loop]]
+        for i in np.linspace(0, n, starts_per_loop, endpoint=False).astype(int):
+            if len(starts) >= starts_per_loop:
+                break
+            if omega[i] > 0 and all(min(abs(i - s), n - abs(i - s)) > win // 2 for s in starts):
+                starts.append(int(i))
+        for i in starts:
+            if cancel is not None and cancel():
+                raise Cancelled()
+            dp = np.abs(src.pos - i)
+            inside = mine & (np.minimum(dp, src.loop_len - dp) <= win)
+            sub = src.subset(~inside)
+            field = Biaf(IndicatorField(sub, p, lc, bvh=bvh, free=fp))
+            tg = make_targets(sub.points, edge[~inside], float(p.step), vertex=sub.vertex, island=sub.island)
+            avoid = src.points[inside & (src.pos != i)]
+            ln = trace(field, fr.points[i], fr.tangent[i], fr.normal[i], p, tg, step=float(p.step), avoid=avoid,
+                       start_vertex=int(fr.vertices[i]), start_island=fr.island, cancel=cancel)
+            every.append(ln)
+            if ln.arrived:
+                from_loop.setdefault(k, []).append((pos_in.get(int(ln.end_vertex), -1), ln))
+    chosen: list[ForceLine] = []
+    notes = []
+    for a in loop_ids:
+        for b in loop_ids:
+            if b <= a:
+                continue
+            ab = [ln for t, ln in from_loop.get(a, []) if t == b]
+            ba = [ln for t, ln in from_loop.get(b, []) if t == a]
+            if len(ab) + len(ba) < 2:
+                continue
+
+            def wins(src_loop: int, to: list[ForceLine]) -> bool:
+                rest = [ln.quality for t, ln in from_loop.get(src_loop, []) if ln not in to]
+                return not to or min(ln.quality for ln in to) > max(rest, default=0.0)
+
+            ok = wins(a, ab) and wins(b, ba)
+            if ok or force:
+                chosen += ab + ba
+            notes.append(f"loops {a} and {b}: {len(ab) + len(ba)} lines join them, "
+                         f"{'a tunnel' if ok else ('forced' if force else 'beaten by lines across their own holes')}")
+    return LineSet(lc_inter, tuple(chosen), tuple(every), "; ".join(notes))
+
+
+def split_line(model: Icadm, frame: LoopFrame, params: FieldParams, *, cancel: Callable[[], bool] | None = None,
+               tries: int = 4, exclude_fraction: float = 0.2) -> tuple[ForceLine, int, int] | None:
+    """Step 3: a force line across the hole ``frame`` from its point of maximal attraction.
+
+    Sources: the hole's own points except a neighbourhood (exclude_fraction of the loop on each
+    side) of the start; L_c = the hole's mean radius. Tries the local maxima of Omega in
+    decreasing order; returns (line, start index, end index) for the first line that arrives at
+    a point far enough from the start along the loop, or None.
+    """
+    n = len(frame.vertices)
+    lc = float(params.lc) if params.lc is not None else loop_radius(frame)
+    p = replace(params, lc=lc, step=params.step if params.step is not None else params.step_factor * lc)
+    bvh = mesh_bvh(model.mesh) if p.shielding and model.mesh.n_faces else None
+    fp = (free_points(model.free_points, kt=p.kt, rc=p.rc_factor * lc, kernel=p.g_kernel)
+          if p.use_free_points and len(model.free_points) else None)
+    ctx = FieldContext(model, p, (frame,), "single", np.zeros(1, dtype=np.int64),
+                       sources_from_frames([frame], group="loop"), _edges((frame,)), lc, float(p.step), bvh, fp)
+    omega, _ = attraction_index(ctx, exclude_fraction=exclude_fraction)
+    w = omega[0]
+    mx = local_maxima(w)
+    order = mx[np.argsort(-w[mx])] if len(mx) else np.argsort(-w)
+    pos = {int(v): i for i, v in enumerate(frame.vertices)}
+    for i in order[:tries]:
+        if cancel is not None and cancel():
+            raise Cancelled()
+        ln = trace_in_loop(ctx, frame, int(i), p, exclude_fraction=exclude_fraction, lc=lc)
+        if not ln.arrived or int(ln.end_vertex) not in pos:
+            continue
+        j = pos[int(ln.end_vertex)]
+        gap = min((j - i) % n, (i - j) % n)
+        if gap >= 2:
+            return ln, int(i), int(j)
+    return None

@@ -1,0 +1,433 @@
+"""Repair benchmark: our repair against the hole fillers people use, on cases with ground truth.
+
+    python -m bench.repair [--cases a,b] [--peers x,y] [--samples N] [--timeout S] [--json OUT] [--no-write]
+
+Writes the "repair" section of docs/benchmarks.md. Peers (the ``[bench]`` extra; a peer that does
+not import is skipped with a note): MeshLib (bridgeFillAllHoles, fillHolesWithExtraPoints,
+fillHoleNicely), CGAL's triangulate_refine_and_fair_hole (Liepa's fill-refine-fair), PyMeshLab's
+close-holes filter, MeshFix, VTK's fill-holes filter (pyvista) and trimesh.repair.fill_holes.
+Ours: ``algorithms.repair.repair`` in light and full mode when that module exists, and always the
+darning alone (every boundary loop filled by ``algorithms.darning.fill_holes``) as a baseline.
+
+Each peer runs in a forked child with a time limit, so a crash or a hang is one row, not the end
+of the benchmark. Scoring follows ../shared/tools/score_repair.py: vertices merged by position,
+topology right = watertight + one component + the truth's genus; kept = share of input faces found
+in the output (by vertex positions, either orientation); Hausdorff and mean distance (exact
+point-to-surface both ways, fractions of the truth's bounding-box diagonal); the min angle of the
+patch faces (output faces that are not input faces) and the share of patch triangles whose min
+angle is below 20 degrees; wall time of the tool's call.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing as mp
+import os
+import tempfile
+import time
+import traceback
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from algorithms import metrics
+from algorithms.topology import edge_table, euler_characteristic, islands, orientation_consistent
+from bench.cases import BenchCase, all_cases
+
+Arrays = tuple[NDArray[np.float64], NDArray[np.int64]]
+Peer = Callable[[NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]], Arrays]
+
+
+class Skip(Exception):
+    """The peer does not apply to this case (e.g. no free points)."""
+
+
+# ---------------------------------------------------------------- peers
+
+def meshlib_fill(V, F, P, mode: str) -> Arrays:
+    import meshlib.mrmeshnumpy as mn
+    import meshlib.mrmeshpy as mr
+
+    mesh = mn.meshFromFacesVerts(np.ascontiguousarray(F, np.int32), np.ascontiguousarray(V, np.float32))
+    if mode == "bridge":
+        p = mr.FillHoleParams()
+        p.metric = mr.getUniversalMetric(mesh)
+        mr.bridgeFillAllHoles(mesh, p)
+    elif mode == "extra":
+        if not len(P):
+            raise Skip("no free points")
+        pc = mn.pointCloudFromPoints(np.ascontiguousarray(P, np.float32))
+        mr.fillHolesWithExtraPoints(mesh, pc, mr.FillHolesWithExtraPointsParams())
+    else:
+        for e in mesh.topology.findHoleRepresentiveEdges():
+            mr.fillHoleNicely(mesh, e, mr.FillHoleNicelySettings())
+    mesh.pack()
+    return np.asarray(mn.getNumpyVerts(mesh), float), np.asarray(mn.getNumpyFaces(mesh.topology), np.int64)
+
+
+def cgal_fill(V, F, P) -> Arrays:
+    from CGAL.CGAL_Polygon_mesh_processing import triangulate_refine_and_fair_hole
+    from CGAL.CGAL_Polyhedron_3 import Polyhedron_3
+
+    used = np.unique(F)
+    remap = np.full(len(V), -1)
+    remap[used] = np.arange(len(used))
+    with tempfile.TemporaryDirectory() as d:
+        with open(f"{d}/in.off", "w") as fh:  # full double precision (CGAL parses it exactly)
+            fh.write(f"OFF\n{len(used)} {len(F)} 0\n")
+            np.savetxt(fh, V[used], fmt="%.17g")
+            np.savetxt(fh, np.c_[np.full(len(F), 3), remap[F]], fmt="%d")
+        poly = Polyhedron_3(f"{d}/in.off")
+    if poly.size_of_facets() != len(F):
+        raise RuntimeError(f"CGAL read {poly.size_of_facets()} of {len(F)} faces (non-manifold input)")
+    for _ in range(100000):  # one hole per pass: filling invalidates the halfedge iterator
+        h = next((he for he in poly.halfedges() if he.is_border()), None)
+        if h is None:
+            break
+        triangulate_refine_and_fair_hole(poly, h, [], [])
+    # read the result through the API (its file writer rounds to 6 digits)
+    index: dict[tuple[float, float, float], int] = {}
+    pts = []
+    for v in poly.vertices():
+        p = v.point()
+        index[(p.x(), p.y(), p.z())] = len(pts)
+        pts.append((p.x(), p.y(), p.z()))
+    faces = []
+    for f in poly.facets():
+        h = f.halfedge()
+        tri = []
+        for _ in range(3):
+            p = h.vertex().point()
+            tri.append(index[(p.x(), p.y(), p.z())])
+            h = h.next()
+        faces.append(tri)
+    return np.asarray(pts, float), np.asarray(faces, np.int64)
+
+
+def pymeshlab_close(V, F, P) -> Arrays:
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(np.asarray(V, float), np.asarray(F, np.int32)))
+    ms.meshing_close_holes(maxholesize=100000)
+    m = ms.current_mesh()
+    return np.asarray(m.vertex_matrix(), float), np.asarray(m.face_matrix(), np.int64)
+
+
+def meshfix(V, F, P) -> Arrays:
+    import pymeshfix
+
+    mf = pymeshfix.MeshFix(np.asarray(V, float), np.asarray(F, np.int32))
+    mf.repair()
+    return np.asarray(mf.points, float), np.asarray(mf.faces, np.int64)
+
+
+def vtk_fill(V, F, P) -> Arrays:
+    import pyvista as pv
+
+    out = pv.PolyData(np.asarray(V, float), np.c_[np.full(len(F), 3), F].ravel()).fill_holes(1e9).triangulate()
+    return np.asarray(out.points, float), out.faces.reshape(-1, 4)[:, 1:].astype(np.int64)
+
+
+def trimesh_fill(V, F, P) -> Arrays:
+    import trimesh
+
+    m = trimesh.Trimesh(np.asarray(V, float), np.asarray(F), process=False)
+    trimesh.repair.fill_holes(m)
+    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+
+
+def ours_darning(V, F, P) -> Arrays:
+    from algorithms.darning import fill_holes
+    from algorithms.normalize import normalize
+
+    model = normalize(V, F, extra_points=P)
+    out, _ = fill_holes(model.mesh)
+    return np.asarray(out.vertices), np.asarray(out.faces)
+
+
+def ours_repair(V, F, P, mode: str) -> Arrays:
+    import importlib
+
+    from algorithms.normalize import normalize
+    from algorithms.params import FieldParams
+
+    rp = importlib.import_module("algorithms.repair")  # written on another branch; may be absent
+    model = normalize(V, F, extra_points=P)
+    res = rp.repair(model, rp.RepairParams(field=FieldParams(mode=mode)))
+    return np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
+
+
+def _has_repair() -> bool:
+    try:
+        import algorithms.repair  # noqa: F401
+    except Exception:
+        return False
+    return True
+
+
+def peers() -> dict[str, tuple[Peer, str]]:
+    """label -> (function, the module it needs)."""
+    out: dict[str, tuple[Peer, str]] = {}
+    if _has_repair():
+        out["bridgefield repair light"] = (lambda V, F, P: ours_repair(V, F, P, "light"), "algorithms.repair")
+        out["bridgefield repair full"] = (lambda V, F, P: ours_repair(V, F, P, "full"), "algorithms.repair")
+    out["bridgefield darning only"] = (ours_darning, "algorithms.darning")
+    out["MeshLib bridgeFillAllHoles"] = (lambda V, F, P: meshlib_fill(V, F, P, "bridge"), "meshlib.mrmeshpy")
+    out["MeshLib fillHolesWithExtraPoints"] = (lambda V, F, P: meshlib_fill(V, F, P, "extra"), "meshlib.mrmeshpy")
+    out["MeshLib fillHoleNicely"] = (lambda V, F, P: meshlib_fill(V, F, P, "nicely"), "meshlib.mrmeshpy")
+    out["CGAL fill-refine-fair"] = (cgal_fill, "CGAL.CGAL_Polygon_mesh_processing")
+    out["PyMeshLab close holes"] = (pymeshlab_close, "pymeshlab")
+    out["MeshFix"] = (meshfix, "pymeshfix")
+    out["VTK fill holes"] = (vtk_fill, "pyvista")
+    out["trimesh fill_holes"] = (trimesh_fill, "trimesh")
+    return out
+
+
+# ---------------------------------------------------------------- running
+
+def _child(fn: Peer, V, F, P, conn) -> None:  # pragma: no cover - runs in the forked child
+    try:
+        t = time.perf_counter()
+        V2, F2 = fn(V, F, P)
+        dt = time.perf_counter() - t
+        conn.send(("ok", np.asarray(V2, float), np.asarray(F2, np.int64).reshape(-1, 3), dt))
+    except Skip as e:
+        conn.send(("skip", str(e)))
+    except Exception as e:
+        conn.send(("error", f"{type(e).__name__}: {e}"[:120] or traceback.format_exc()[-120:]))
+    conn.close()
+
+
+def run_isolated(fn: Peer, case: BenchCase, timeout: float) -> tuple[str, object]:
+    """Run a peer in a forked child; ("ok", (V, F, seconds)) or ("skip"|"error"|"timeout"|"crash", text)."""
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    p = ctx.Process(target=_child, args=(fn, case.vertices, case.faces, case.free_points, send))
+    p.start()
+    send.close()
+    got = None
+    if recv.poll(timeout):
+        try:
+            got = recv.recv()
+        except EOFError:
+            got = None
+    p.join(5)
+    if p.is_alive():
+        p.kill()
+        p.join()
+        if got is None:
+            return "timeout", f"over {timeout:.0f} s"
+    if got is None:
+        return "crash", f"exit code {p.exitcode}"
+    if got[0] == "ok":
+        return "ok", (got[1], got[2], got[3])
+    return got[0], got[1]
+
+
+# ---------------------------------------------------------------- scoring
+
+def merge_positions(V: NDArray[np.float64], F: NDArray[np.int64], tol: float) -> Arrays:
+    """Vertices within ``tol`` of each other merged (KD-tree clusters), unreferenced ones dropped,
+    faces that collapse dropped."""
+    used = np.unique(F)
+    pts = V[used]
+    tree = cKDTree(pts)
+    pairs = tree.query_pairs(tol, output_type="ndarray")
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    g = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(pts),) * 2) if len(pairs) \
+        else sp.coo_matrix((len(pts),) * 2)
+    _, lab = connected_components(g, directed=False)
+    first = np.full(lab.max() + 1, -1)
+    first[lab[::-1]] = np.arange(len(pts))[::-1]
+    remap = np.full(len(V), -1)
+    remap[used] = lab
+    f = remap[F]
+    ok = (f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])
+    return pts[first], f[ok]
+
+
+def _topology(faces: NDArray[np.int64]) -> tuple[bool, int, float | None]:
+    """(watertight, components, genus if closed)."""
+    et = edge_table(faces)
+    closed = bool(np.all(et.counts == 2))
+    watertight = closed and orientation_consistent(faces)
+    comps, _ = islands(faces)
+    chi = euler_characteristic(faces)
+    return watertight, int(comps), ((2 * comps - chi) / 2 if closed else None)
+
+
+def score(case: BenchCase, V2: NDArray[np.float64], F2: NDArray[np.int64], *, samples: int) -> dict:
+    ref = case.truth
+    diag = ref.bbox_diagonal() if ref is not None else float(np.linalg.norm(np.ptp(case.vertices, axis=0)))
+    tol = 1e-6 * diag
+    if not len(F2):
+        return {"watertight": False, "components": 0, "genus": None, "topology_right": False, "kept": 0.0}
+    mv, mf = merge_positions(V2, F2, tol)
+    # topology as the tool wrote it (distinct vertices may share a position, e.g. where a
+    # non-manifold input vertex was split); if that is not closed, with coincident vertices merged
+    # (tools that duplicate vertices along a seam)
+    watertight, comps, genus = _topology(np.asarray(F2, dtype=np.int64))
+    if not watertight:
+        watertight, comps, genus = _topology(mf)
+    right = bool(watertight and comps == 1 and genus == case.genus)
+    # input faces found in the output (by position, either orientation)
+    tree = cKDTree(mv)
+    used = np.unique(case.faces)
+    dist, idx = tree.query(case.vertices[used])
+    vmap = np.full(len(case.vertices), -1)
+    vmap[used] = np.where(dist <= tol * 10, idx, -1)
+    fin = vmap[case.faces]
+    found = (fin >= 0).all(axis=1)
+    nv = len(mv) + 1
+    key = lambda f: np.sort(f, axis=1) @ np.array([nv * nv, nv, 1])  # noqa: E731
+    out_keys = key(mf)
+    in_keys = key(fin[found])
+    kept = float(np.isin(in_keys, out_keys).sum() / max(1, len(case.faces)))
+    patch = mf[~np.isin(out_keys, in_keys)]
+    ang = metrics.min_angles(mv, patch) if len(patch) else np.zeros(0)
+    row = {"watertight": watertight, "components": int(comps), "genus": genus, "topology_right": right,
+           "kept": kept, "new_faces": int(len(patch)),
+           "patch_min_angle": float(ang.min()) if len(ang) else None,
+           "patch_below_20": float((ang < 20).mean()) if len(ang) else None}
+    if ref is not None:
+        d = metrics.distances(mv, mf, ref.vertices, ref.faces, samples=samples)
+        row.update(hausdorff=d.hausdorff, mean=d.mean)
+    return row
+
+
+# ---------------------------------------------------------------- report
+
+def _pct(x: object, digits: int = 2) -> str:
+    return "–" if x is None else f"{100 * float(x):.{digits}f}"
+
+
+def _topo(r: dict) -> str:
+    if "status" in r and r["status"] != "ok":
+        return f"{r['status']}: {r.get('note', '')}"
+    g = "–" if r["genus"] is None else f"{r['genus']:g}"
+    mark = "**yes**" if r["topology_right"] else "no"
+    return f"{mark} (wt {'y' if r['watertight'] else 'n'}, c {r['components']}, g {g})"
+
+
+def markdown(rows: list[dict], cases: list[BenchCase], notes: list[str], samples: int) -> str:
+    from bench.report import table
+
+    bridge = {r["case"]: r.get("seconds") for r in rows if r["peer"] == "MeshLib bridgeFillAllHoles"}
+    head = ["case", "method", "topology right (watertight, components, genus)", "input faces kept %",
+            "Hausdorff % diag", "mean % diag", "patch min angle °", "patch < 20° %", "time s", "× MeshLib bridge"]
+    body = []
+    for r in rows:
+        ok = r.get("status") == "ok"
+        ratio = "–"
+        if ok and r["peer"].startswith("bridgefield") and bridge.get(r["case"]):
+            ratio = f"{r['seconds'] / bridge[r['case']]:.1f}"
+        body.append([r["case"], r["peer"], _topo(r), _pct(r.get("kept"), 1) if ok else "–",
+                     _pct(r.get("hausdorff")) if ok else "–", _pct(r.get("mean"), 3) if ok else "–",
+                     "–" if not ok or r.get("patch_min_angle") is None else f"{r['patch_min_angle']:.1f}",
+                     _pct(r.get("patch_below_20"), 1) if ok else "–",
+                     f"{r['seconds']:.3f}" if ok else "–", ratio])
+    # per-method summary
+    names = list(dict.fromkeys(r["peer"] for r in rows))
+    summ = []
+    for n in names:
+        rs = [r for r in rows if r["peer"] == n and r.get("status") != "skip"]
+        okr = [r for r in rs if r.get("status") == "ok"]
+        hs = [r["hausdorff"] for r in okr if "hausdorff" in r]
+        summ.append([n, f"{sum(r['topology_right'] for r in okr)} / {len(rs)}",
+                     f"{sum(r['kept'] >= 1.0 - 1e-12 for r in okr)} / {len(rs)}",
+                     _pct(np.median(hs)) if hs else "–", _pct(max(hs)) if hs else "–",
+                     f"{np.median([r['seconds'] for r in okr]):.3f}" if okr else "–"])
+    case_lines = "\n".join(f"- `{c.name}` ({len(c.faces)} faces, {len(c.free_points)} free points, genus "
+                           f"{c.genus}{'' if c.truth is not None else ', no truth'}): {c.description}" for c in cases)
+    parts = [
+        "## Repair: hole filling and island bridging against ground truth",
+        "",
+        "Rerun: `python -m bench.repair` (peers from the `[bench]` extra). Cases: the five demo cases "
+        "(`assets/repair`) and cases cut from `../shared/data` (`bench/cases.py`), plus the real scanned "
+        "bunny (topology only). Scoring as `../shared/tools/score_repair.py`: vertices merged by position; "
+        "topology right = watertight, one component and the truth's genus; kept = share of input faces found "
+        "in the output; distances both ways, exact point-to-surface over "
+        f"{samples} samples a side, in % of the truth's bounding-box diagonal; patch = output faces that are "
+        "not input faces (min angle, share of patch triangles with a min angle below 20°); time = the tool's "
+        "call only (ours includes normalisation).",
+        "",
+        case_lines,
+        "",
+        "### Summary",
+        "",
+        table(["method", "topology right", "all input faces kept", "median Hausdorff %", "max Hausdorff %",
+               "median time s"], summ),
+        "",
+        "### Every case",
+        "",
+        table(head, body),
+    ]
+    if notes:
+        parts += ["", "Notes: " + "; ".join(notes) + "."]
+    return "\n".join(parts)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m bench.repair", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--cases", help="comma-separated case names (default: all)")
+    ap.add_argument("--peers", help="comma-separated substrings of method labels (default: all)")
+    ap.add_argument("--samples", type=int, default=10000, help="surface samples a side for the distances")
+    ap.add_argument("--timeout", type=float, default=120.0, help="seconds per tool and case")
+    ap.add_argument("--json", help="also write the rows as JSON here")
+    ap.add_argument("--no-write", action="store_true", help="do not touch docs/benchmarks.md")
+    args = ap.parse_args(argv)
+    cases = all_cases()
+    if args.cases:
+        want = set(args.cases.split(","))
+        cases = [c for c in cases if c.name in want]
+    table_peers = peers()
+    notes: list[str] = []
+    if "bridgefield repair light" not in table_peers:
+        notes.append("algorithms.repair is not available in this checkout: only the darning baseline is ours")
+    usable: dict[str, Peer] = {}
+    import importlib
+
+    for label, (fn, module) in table_peers.items():
+        if args.peers and not any(s.strip().lower() in label.lower() for s in args.peers.split(",")):
+            continue
+        try:
+            importlib.import_module(module)
+        except Exception as e:
+            notes.append(f"{label} skipped ({module} does not import: {type(e).__name__})")
+            continue
+        usable[label] = fn
+    rows = []
+    for case in cases:
+        for label, fn in usable.items():
+            status, res = run_isolated(fn, case, args.timeout)
+            row: dict = {"case": case.name, "peer": label, "status": status}
+            if status == "ok":
+                V2, F2, dt = res  # type: ignore[misc]
+                row["seconds"] = dt
+                row.update(score(case, V2, F2, samples=args.samples))
+            else:
+                row["note"] = res
+            rows.append(row)
+            print(json.dumps(row, default=float), flush=True)
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1, default=float))
+    md = markdown(rows, cases, notes, args.samples)
+    if not args.no_write:
+        from bench.report import write_section
+
+        write_section("repair", md)
+    else:
+        print(md)
+    return 0
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("OMP_NUM_THREADS", "2")
+    raise SystemExit(main())

@@ -1,0 +1,93 @@
+import numpy as np
+import pytest
+
+from algorithms.bridge_graph import Bridge, ConflictRules, GraphState, resample_chain, split_polygon, walk_holes
+from algorithms.cases import combine, disk
+from algorithms.holes import SimpleHoleTest, classify_hole, polygon_self_intersects
+from algorithms.topology import boundary_loops
+
+
+def two_disks():
+    m = combine(disk(segments=16, rings=1), disk(center=(4, 0, 0), segments=16, rings=1))
+    loops = boundary_loops(m.faces)
+    return m, sorted(loops, key=lambda lp: lp.min())
+
+
+def test_walk_two_bridges_gives_two_disk_holes():
+    m, loops = two_disks()
+    b1 = Bridge(2, 25, np.array([[2.0, 0.38, 0]]), 1.0)
+    b2 = Bridge(16, 27, np.array([[2.0, -0.38, 0]]), 0.9)
+    holes = walk_holes(loops, [b1, b2], [np.array([34]), np.array([35])])
+    assert sorted(len(h.polygon) for h in holes) == [8, 32]
+    small = min(holes, key=lambda h: len(h.polygon))
+    k = small.polygon.index(16)
+    assert small.polygon[k:] + small.polygon[:k] == (16, 1, 2, 34, 25, 26, 27, 35)
+    assert all(h.is_disk for h in holes)
+    # every bridge walked once in each direction over all holes
+    uses = sorted(u for h in holes for u in h.bridges)
+    assert uses == [(0, -1), (0, 1), (1, -1), (1, 1)]
+
+
+def test_walk_single_bridge_is_not_a_disk():
+    m, loops = two_disks()
+    holes = walk_holes(loops, [Bridge(2, 25, np.zeros((0, 3)), 1.0)], [np.zeros(0, dtype=int)])
+    assert len(holes) == 1 and not holes[0].is_disk
+    assert len(holes[0].polygon) == 16 + 16 + 2
+
+
+def test_loops_without_bridges_are_their_own_holes():
+    m, loops = two_disks()
+    holes = walk_holes(loops, [], [])
+    assert sorted(h.polygon for h in holes) == sorted(tuple(int(x) for x in lp) for lp in loops)
+
+
+def test_conflicts():
+    m, loops = two_disks()
+    loop_of = {int(v): (k, i) for k, lp in enumerate(loops) for i, v in enumerate(lp)}
+    st = GraphState(m.vertices, loop_of, [len(lp) for lp in loops],
+                    ConflictRules(clearance=0.2, neighbourhood=0.5, endpoint_gap=2))
+    v = m.vertices
+    st.add(Bridge(2, 25, resample_chain(np.vstack([v[2], v[25]]), 0.1), 1.0))
+    # a bridge between neighbours of both ends duplicates the connection
+    assert "same neighbourhood" in st.conflict(Bridge(3, 24, resample_chain(np.vstack([v[3], v[24]]), 0.1), 0.9)) \
+        or "endpoint" in st.conflict(Bridge(3, 24, np.zeros((0, 3)), 0.9))
+    # crossing bridges conflict
+    cross = Bridge(4, 23, resample_chain(np.vstack([v[16], v[27]]) * [1, -1, 1], 0.1), 0.8)
+    assert st.conflict(Bridge(16, 27, resample_chain(np.vstack([v[2], v[27]]), 0.1), 0.8)) is not None
+    assert cross.start == 4
+    # a bridge on the other side is fine
+    assert st.conflict(Bridge(16, 27, resample_chain(np.vstack([v[16], v[27]]), 0.1), 0.8)) is None
+
+
+def test_resample_chain_spacing():
+    pts = resample_chain(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0]], float), 0.25)
+    assert len(pts) == 7
+    np.testing.assert_allclose(np.diff(np.r_[[[0, 0, 0]], pts, [[1, 1, 0]]], axis=0).__abs__().sum(1), 0.25)
+
+
+def test_split_polygon_walks_chain_both_ways():
+    a, b = split_polygon((0, 1, 2, 3), 0, 2, np.array([9]))
+    assert a == (0, 1, 2, 9) and b == (2, 3, 0, 9)
+    with pytest.raises(ValueError):
+        split_polygon((0, 1, 2), 1, 1, np.array([]))
+
+
+def circle(n, z=lambda t: 0 * t):
+    t = 2 * np.pi * np.arange(n) / n
+    return np.stack([np.cos(t), -np.sin(t), z(t)], axis=1)  # clockwise seen from +z
+
+
+def test_simple_hole_test():
+    up = np.tile([0, 0, 1.0], (32, 1))
+    assert classify_hole(circle(32), up, SimpleHoleTest()).simple
+    saddle = classify_hole(circle(32, lambda t: 0.8 * np.cos(2 * t)), up, SimpleHoleTest())
+    assert not saddle.simple and "not flat" in saddle.reasons[0]
+    big = classify_hole(circle(300), np.tile([0, 0, 1.0], (300, 1)), SimpleHoleTest())
+    assert not big.simple and "300 boundary vertices" in big.reasons[0]
+    assert classify_hole(circle(32), up, SimpleHoleTest.for_method("fan")).simple
+
+
+def test_self_intersection():
+    eight = np.array([[0, 0], [1, 1], [1, 0], [0, 1]], float)
+    assert polygon_self_intersects(eight)
+    assert not polygon_self_intersects(np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float))
