@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numpy as np
@@ -532,21 +533,21 @@ class IndicatorField:
         for a in range(0, n, self.chunk):
             sl = slice(a, min(a + self.chunk, n))
             if not self.full:
-                kern = _field_light if sl.stop - sl.start >= SERIAL_BELOW else _field_light_serial
-                kern(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
-                             S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2, H[sl], near[sl], dist[sl])
+                lk: Any = _field_light if sl.stop - sl.start >= SERIAL_BELOW else _field_light_serial
+                lk(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
+                   S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2, H[sl], near[sl], dist[sl])
                 pairs += (sl.stop - sl.start) * len(S)
             else:
                 bvh = self.bvh
                 barr = bvh.arrays() if bvh is not None else _EMPTY_BVH
                 garr = lattice_args(self.free) if self.free is not None else _EMPTY_GRID
                 cnt = np.zeros(sl.stop - sl.start, dtype=np.int64)
-                kern = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
-                kern(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
-                            S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
-                     self.shrink ** 2, int(p.shield_stride),
-                            self.shield, *barr, bvh.scale if bvh is not None else 1.0,
-                            self.free is not None, *garr, H[sl], near[sl], dist[sl], cnt)
+                fk: Any = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
+                fk(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
+                   S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
+                   self.shrink ** 2, int(p.shield_stride),
+                   self.shield, *barr, bvh.scale if bvh is not None else 1.0,
+                   self.free is not None, *garr, H[sl], near[sl], dist[sl], cnt)
                 pairs += int(cnt.sum())
         return Evaluation(H.reshape(n, 3, 3), near, dist, pairs)
 

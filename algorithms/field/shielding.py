@@ -289,5 +289,5 @@ def blocked(bvh: Bvh, x: NDArray[np.float64], o: NDArray[np.float64], *, x_verte
     ov = np.full(n, -1, dtype=np.int64) if o_vertex is None else np.asarray(o_vertex, dtype=np.int64)
     out = np.zeros(n, dtype=np.bool_)
     if n:
-        _blocked_many(x, o, xv, ov, *bvh.arrays(), bvh.scale, out)
+        _blocked_many(x, o, xv, ov, *bvh.arrays(), bvh.scale, out)  # type: ignore[call-arg]
     return out
