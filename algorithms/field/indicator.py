@@ -390,21 +390,38 @@ def top_normal(H: Arr, t: Arr, hint: Arr | None = None) -> tuple[Arr, Arr]:
 
 @numba.njit(cache=True)
 def _normal_one(hm, t, hint):
-    """(16b) for one point: top eigenvector of P H^T H P (P = I - t t^T), sign n . hint >= 0.
-    Returns (n, H n)."""
-    tn = np.sqrt(t @ t)
-    tt = t / tn if tn > 0 else t * 0.0
-    P = np.eye(3) - np.outer(tt, tt)
-    HP = hm @ P
-    w, v = np.linalg.eigh(HP.T @ HP)
-    n = v[:, 2].copy()
-    n = n - (n @ tt) * tt
-    nn = np.sqrt(n @ n)
-    if nn > 0:
-        n = n / nn
-    if n @ hint < 0:
-        n = -n
-    return n, hm @ n
+    """(16b) for one point in closed form: with e1, e2 an orthonormal basis of the plane normal
+    to t, |H n|^2 for n = cos(phi) e1 + sin(phi) e2 is a 2x2 quadratic form [[a, b], [b, c]]
+    whose top eigenvector has phi = atan2(2 b, a - c) / 2 (the same n as the top eigenvector of
+    P H^T H P). Sign n . hint >= 0. Returns (n, H n)."""
+    tn = np.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+    t0, t1, t2 = t[0] / tn, t[1] / tn, t[2] / tn
+    if abs(t0) < 0.9:  # e1 = unit(t x x_axis) or unit(t x y_axis)
+        e0, e1_, e2_ = 0.0, t2, -t1
+    else:
+        e0, e1_, e2_ = -t2, 0.0, t0
+    en = np.sqrt(e0 * e0 + e1_ * e1_ + e2_ * e2_)
+    e0, e1_, e2_ = e0 / en, e1_ / en, e2_ / en
+    f0, f1, f2 = t1 * e2_ - t2 * e1_, t2 * e0 - t0 * e2_, t0 * e1_ - t1 * e0  # e2 = t x e1
+    u0 = hm[0, 0] * e0 + hm[0, 1] * e1_ + hm[0, 2] * e2_
+    u1 = hm[1, 0] * e0 + hm[1, 1] * e1_ + hm[1, 2] * e2_
+    u2 = hm[2, 0] * e0 + hm[2, 1] * e1_ + hm[2, 2] * e2_
+    v0 = hm[0, 0] * f0 + hm[0, 1] * f1 + hm[0, 2] * f2
+    v1 = hm[1, 0] * f0 + hm[1, 1] * f1 + hm[1, 2] * f2
+    v2 = hm[2, 0] * f0 + hm[2, 1] * f1 + hm[2, 2] * f2
+    a = u0 * u0 + u1 * u1 + u2 * u2
+    b = u0 * v0 + u1 * v1 + u2 * v2
+    c = v0 * v0 + v1 * v1 + v2 * v2
+    phi = 0.5 * np.arctan2(2.0 * b, a - c)
+    cp, sp = np.cos(phi), np.sin(phi)
+    n = np.empty(3)
+    n[0], n[1], n[2] = cp * e0 + sp * f0, cp * e1_ + sp * f1, cp * e2_ + sp * f2
+    if n[0] * hint[0] + n[1] * hint[1] + n[2] * hint[2] < 0:
+        n[0], n[1], n[2] = -n[0], -n[1], -n[2]
+    f = np.empty(3)
+    for k in range(3):
+        f[k] = hm[k, 0] * n[0] + hm[k, 1] * n[1] + hm[k, 2] * n[2]
+    return n, f
 
 
 @numba.njit(cache=True, fastmath=True)
