@@ -181,22 +181,27 @@ def local_maxima(omega: Arr, *, floor: float = 0.0) -> NDArray[np.int64]:
     return np.flatnonzero((w > floor) & (w > prev) & (w >= nxt))
 
 
-def _trace_unit(ctx: FieldContext, loop: int, index: int, params: FieldParams,
-                normal_hint: Arr | None = None) -> ForceLine:
-    """A line from point `index` of loop `loop` with sources = the other units' boundary points."""
+def _unit_tools(ctx: FieldContext, unit: int, params: FieldParams) -> tuple:
+    """What every line from one base unit shares: its field, targets and avoid tree (built once)."""
     S = ctx.sources
-    fr = ctx.frames[loop]
-    g = ctx.unit[loop]
-    other = S.group != g
+    other = S.group != unit
     sub = S.subset(other)
     field = Biaf(IndicatorField(sub, params, ctx.lc, bvh=ctx.bvh, free=ctx.free))
     tg = make_targets(sub.points, ctx.edge[other], ctx.step, vertex=sub.vertex, island=sub.island)
-    return trace(field, fr.points[index], fr.tangent[index], fr.normal[index] if normal_hint is None else normal_hint,
-                 params, tg, step=ctx.step, avoid=S.points[~other], start_vertex=int(fr.vertices[index]),
-                 start_island=fr.island)
+    mine = S.points[~other]
+    return field, tg, cKDTree(mine) if len(mine) else None
 
 
-def trace_in_loop(model_or_ctx: Icadm | FieldContext, frame: LoopFrame, start_index: int, params: FieldParams, *,
+def _trace_unit(ctx: FieldContext, loop: int, index: int, params: FieldParams, tools: tuple | None = None) -> ForceLine:
+    """A line from point `index` of loop `loop` with sources = the other units' boundary points."""
+    fr = ctx.frames[loop]
+    field, tg, avoid = tools if tools is not None else _unit_tools(ctx, int(ctx.unit[loop]), params)
+    return trace(field, fr.points[index], fr.tangent[index], fr.normal[index], params, tg, step=ctx.step,
+                 avoid=avoid, start_vertex=int(fr.vertices[index]), start_island=fr.island)
+
+
+def trace_in_loop(model_or_ctx: Icadm | FieldContext | LoopFrame | None, frame: LoopFrame, start_index: int,
+                  params: FieldParams, *,
                   exclude_fraction: float = 0.2, lc: float | None = None, bvh: Bvh | None = None,
                   free: FreePoints | None = None) -> ForceLine:
     """Trace inside ONE hole (hole splitting, §6 step 3).
@@ -209,8 +214,10 @@ def trace_in_loop(model_or_ctx: Icadm | FieldContext, frame: LoopFrame, start_in
     """
     if isinstance(model_or_ctx, FieldContext):
         model, bvh, free = model_or_ctx.model, bvh or model_or_ctx.bvh, free or model_or_ctx.free
-    else:
+    elif isinstance(model_or_ctx, Icadm):
         model = model_or_ctx
+    else:  # None or a LoopFrame: no triangles, no free points (light-mode behaviour)
+        model = None
     lc_ = float(params.lc) if params.lc is not None else (lc if lc is not None else loop_radius(frame))
     step = float(params.step) if params.step is not None else params.step_factor * lc_
     if params.shielding and bvh is None and model is not None and model.mesh.n_faces:
@@ -234,6 +241,19 @@ def trace_in_loop(model_or_ctx: Icadm | FieldContext, frame: LoopFrame, start_in
     return line
 
 
+_LAST_CONTEXT: list = []  # (model, params, context) of the last inspector click
+
+
+def _cached_context(model: Icadm, params: FieldParams) -> FieldContext:
+    """field_context, reused while the model object and the parameters stay the same (the
+    inspector clicks one vertex after another on one model)."""
+    if _LAST_CONTEXT and _LAST_CONTEXT[0][0] is model and _LAST_CONTEXT[0][1] == params:
+        return _LAST_CONTEXT[0][2]
+    ctx = field_context(model, params)
+    _LAST_CONTEXT[:] = [(model, params, ctx)]
+    return ctx
+
+
 def _locate(frames: tuple[LoopFrame, ...], vertex: int) -> tuple[int, int]:
     for li, fr in enumerate(frames):
         hit = np.flatnonzero(fr.vertices == vertex)
@@ -246,7 +266,7 @@ def trace_from_vertex(model: Icadm, params: FieldParams, vertex: int, *, ctx: Fi
     """The inspector's click: trace from one boundary vertex. Sources = the other units' boundaries
     (islands, or loops of a single island); with a single loop, the rest of its own loop minus
     the excluded neighbourhood (trace_in_loop)."""
-    ctx = ctx or field_context(model, params)
+    ctx = ctx or _cached_context(model, params)
     loop, idx = _locate(ctx.frames, int(vertex))
     if ctx.unit_kind == "single":
         return trace_in_loop(ctx, ctx.frames[loop], idx, ctx.params, lc=ctx.lc)
@@ -295,10 +315,14 @@ def find_candidate_bridges(model: Icadm, params: FieldParams, *, progress: Calla
     t = time.perf_counter()
     cands = []
     fp = ctx.model.free_points if params.use_free_points else None
+    tools: dict[int, tuple] = {}
     for k, (li, i) in enumerate(starts):  # lines are independent; traced one after the other
         check()
         report(0.1 + 0.9 * k / max(len(starts), 1), f"tracing line {k + 1} of {len(starts)}")
-        line = _trace_unit(ctx, li, i, params_used)
+        u = int(ctx.unit[li])
+        if u not in tools:
+            tools[u] = _unit_tools(ctx, u, params_used)
+        line = _trace_unit(ctx, li, i, params_used, tools[u])
         fac = None
         if line.arrived:
             fa, ia = li, i

@@ -19,6 +19,7 @@ How a line ends (records.STATUSES), checked in this order after each step:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -45,16 +46,19 @@ class Targets:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_tree", cKDTree(self.points) if len(self.points) else None)
+        object.__setattr__(self, "_rmax", float(self.reach.max()) if len(self.reach) else 0.0)
 
     def hit(self, x: Arr) -> int:
         """Index of the nearest target within its reach of x, or -1."""
         tree = self._tree  # type: ignore[attr-defined]
         if tree is None:
             return -1
-        k = min(4, len(self.points))
-        dist, idx = tree.query(x, k=k)
+        dist, idx = tree.query(x, k=min(4, len(self.points)), distance_upper_bound=self._rmax)  # type: ignore
         dist, idx = np.atleast_1d(dist), np.atleast_1d(idx)
-        ok = dist < self.reach[idx]
+        ok = np.isfinite(dist)
+        if not ok.any():
+            return -1
+        ok[ok] = dist[ok] < self.reach[idx[ok]]
         return int(idx[np.argmax(ok)]) if ok.any() else -1
 
 
@@ -69,18 +73,22 @@ def make_targets(points: Arr, edge: Arr, step: float, *, vertex: NDArray[np.int6
 
 
 def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, start_normal: Arr,
-          params: FieldParams, targets: Targets, *, step: float, avoid: Arr | None = None,
+          params: FieldParams, targets: Targets, *, step: float, avoid: Arr | cKDTree | None = None,
           start_vertex: int = -1, start_island: int = -1,
           cancel: Callable[[], bool] | None = None) -> ForceLine:
     """Trace one force line from a boundary point (spec §5), recording every step.
 
     start_tangent: tau at the origin (the normal there comes from (16a) with n . start_normal > 0);
     step: the step s; targets: where the line may arrive; avoid (K, 3): points whose one-step
-    neighbourhood means "turned back". params.tracer picks the simple or the predictor-corrector
-    tracer; params.deviation is d in steps; params.threshold and max_steps as in the module doc.
+    neighbourhood means "turned back" (or a prebuilt cKDTree of them). params.tracer picks the
+    simple or the predictor-corrector tracer; params.deviation is d in steps; params.threshold
+    and max_steps as in the module doc.
     """
     x = np.asarray(start_point, dtype=np.float64).copy()
-    avoid_tree = cKDTree(np.asarray(avoid).reshape(-1, 3)) if avoid is not None and len(avoid) else None
+    if isinstance(avoid, cKDTree):
+        avoid_tree: cKDTree | None = avoid
+    else:
+        avoid_tree = cKDTree(np.asarray(avoid).reshape(-1, 3)) if avoid is not None and len(avoid) else None
     tau0 = np.asarray(start_tangent, dtype=np.float64)
     s0 = field.sample(x, tau0, np.asarray(start_normal, dtype=np.float64))  # (16a)
     pts, nrm, frc, ten = [x.copy()], [s0.normal if s0.normal is not None else np.zeros(3)], [
@@ -96,16 +104,17 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
     if s0.force is None or t0 <= 0 or s0.normal is None:
         return done(TOO_WEAK)
     f, n = s0.force, s0.normal
-    p_prev: Arr | None = None
     dev = params.deviation * step
     offs = np.linspace(-1.0, 1.0, PC_SAMPLES)
+    simple = params.tracer == "simple"
+    start = pts[0]
     while True:  # sequential: each step starts where the previous one ended
         if cancel is not None and cancel():
             raise Cancelled()
         if len(pts) >= params.max_steps:
             return done(STEP_LIMIT)
-        p = f / np.linalg.norm(f)
-        if params.tracer == "simple":  # 2004: X_{k+1} = X_k + s F_k / |F_k|
+        p = f / math.sqrt(float(f @ f))
+        if simple:  # 2004: X_{k+1} = X_k + s F_k / |F_k|
             x_new = x + step * p
         else:  # 2010 F4.1: predictor, then the point of maximum potential across the predicted normal
             pred = x + step * p
@@ -116,10 +125,9 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
                    for c, o in zip(cand, offs)]
             x_new = cand[int(np.argmax(psi))]
         tang = x_new - x
-        tang /= max(float(np.linalg.norm(tang)), 1e-300)
+        tang /= max(math.sqrt(float(tang @ tang)), 1e-300)
         s = field.sample(x_new, tang, n)  # (16b): n . p = 0, sign n . n_prev > 0
         x = x_new
-        p_prev = tang
         hit = targets.hit(x)
         if hit >= 0:
             end = targets.points[hit]
@@ -129,15 +137,18 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
             frc.append(se.force if se.force is not None else np.zeros(3))
             ten.append(se.tension)
             return done(ARRIVED, hit)
-        pts.append(x.copy())
+        sf = s.force
+        tension = math.sqrt(float(sf @ sf)) if sf is not None else 0.0
+        pts.append(x)
         nrm.append(s.normal if s.normal is not None else n)
-        frc.append(s.force if s.force is not None else np.zeros(3))
-        ten.append(s.tension)
-        if avoid_tree is not None and np.linalg.norm(x - pts[0]) > 2 * step:
-            if avoid_tree.query(x)[0] < step:
+        frc.append(sf if sf is not None else np.zeros(3))
+        ten.append(tension)
+        if avoid_tree is not None:
+            dx = x - start
+            if float(dx @ dx) > 4 * step * step and avoid_tree.query(x)[0] < step:
                 return done(TURNED_BACK)
-        if s.force is None or s.normal is None or s.tension < floor or s.tension <= 0:
+        if sf is None or s.normal is None or tension < floor or tension <= 0:
             return done(TOO_WEAK)
-        if float(s.force @ p_prev) < 0:
+        if float(sf @ tang) < 0:
             return done(STALLED)
-        f, n = s.force, s.normal
+        f, n = sf, s.normal

@@ -30,6 +30,7 @@ class FieldParams:
     threshold: float = 0.02  # a line stops as "too weak" when |H n| < threshold * |H n| at its start
     max_steps: int = 2000
     tracer: str = "simple"  # "simple" (2004) or "predictor-corrector" (2010, F4.1)
+    shield_stride: int = 8  # full mode: shielding / q2 tested at every k-th source of a run, 1 = every source
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -59,6 +60,8 @@ class FieldParams:
                 raise bad(name, "must be positive")
         if not (0 <= self.threshold < 1):
             raise bad("threshold", "must lie in [0, 1)")
+        if not (1 <= self.shield_stride <= 1024) or int(self.shield_stride) != self.shield_stride:
+            raise bad("shield_stride", "must be a whole number from 1 to 1024")
         if not (1 <= self.max_steps <= 10_000_000) or int(self.max_steps) != self.max_steps:
             raise bad("max_steps", "must be a whole number >= 1")
 

@@ -38,9 +38,15 @@ def test_grid_q2_agrees_with_kdtree_q2():
     pts = rng.uniform(-1, 1, size=(200, 3))
     fp = free_points(pts, kt=0.6, rc=0.2)
     x, o = rng.uniform(-1, 1, size=(20, 3)), rng.uniform(-1, 1, size=(20, 3))
-    got = q2_many(fp, x, o)
+    got = q2_many(fp, x, o, exact=True)
     ref = [q2_segment(x[i], o[i], pts, kt=0.6, rc=0.2, samples=8) for i in range(20)]
     np.testing.assert_allclose(got, ref, rtol=1e-3)  # same midpoint rule; the grid cuts off at G < 1e-4 G(0)
+    # the lattice of the field kernel: trilinear interpolation of sum G, 16 samples
+    lat = q2_many(fp, x, o)
+    ref16 = [q2_segment(x[i], o[i], pts, kt=0.6, rc=0.2, samples=16) for i in range(20)]
+    np.testing.assert_allclose(lat, ref16, rtol=0.03)
+    L = np.linalg.norm(o - x, axis=1)
+    assert np.all(lat < L) and np.all(lat > 0)
 
 
 def test_praf_potential_and_normal():

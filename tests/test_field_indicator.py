@@ -106,3 +106,18 @@ def test_chunking_does_not_change_the_field():
     a = IndicatorField(src, FieldParams(), 1.0, chunk=7).evaluate(x).H
     b = IndicatorField(src, FieldParams(), 1.0).evaluate(x).H
     np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-14)
+
+
+def test_single_point_closed_form_normal_matches_the_eigenvector():
+    from algorithms.field.indicator import _normal_one
+
+    rng = np.random.default_rng(13)
+    for _ in range(50):
+        H = rng.normal(size=(3, 3))
+        t = rng.normal(size=3)
+        hint = rng.normal(size=3)
+        n, f = _normal_one(H, t, hint)
+        n_ref, ten = top_normal(H[None], t[None], hint[None])
+        assert abs(n @ n_ref[0]) == pytest.approx(1.0, abs=1e-9)
+        assert n @ hint >= 0 and np.linalg.norm(f) == pytest.approx(ten[0], rel=1e-9)
+        np.testing.assert_allclose(f, H @ n, atol=1e-12)

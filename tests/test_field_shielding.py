@@ -108,3 +108,23 @@ def test_tiny_meshes(n):
     bvh = build_bvh(v, f)
     x, o = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
     np.testing.assert_array_equal(blocked(bvh, x, o), brute_blocked(v, f, x, o) if n else np.zeros(50, bool))
+
+
+def test_visibility_coherence_agrees_with_exact_shielding():
+    """shield_stride > 1 interpolates visibility between far anchors; near sources stay exact."""
+    from algorithms.bridges import attraction_index, field_context
+    from algorithms.demos import demo
+    from algorithms.io import load_model
+
+    m = load_model(demo("two-caps", "repair").path)
+    om = {}
+    for stride in (1, 8):
+        ctx = field_context(m, FieldParams(mode="full", shield_stride=stride))
+        om[stride] = np.concatenate(attraction_index(ctx)[0])
+    assert om[1].max() > 0
+    np.testing.assert_allclose(om[8], om[1], rtol=0.02, atol=0.02 * om[1].max())
+
+
+def test_shield_stride_is_validated():
+    with pytest.raises(ValueError, match="parameter shield_stride="):
+        FieldParams(shield_stride=0)

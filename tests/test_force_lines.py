@@ -155,3 +155,14 @@ def test_hole_splitting_default_lc_is_the_mean_radius_and_a_line_into_the_window
         ang = np.degrees(np.arccos(np.clip(end[:2] @ hole.points[0, :2], -1, 1)))
         assert ang < 90  # the spec's 34 or 62 degrees: a sliver
     assert ln_small.status in (ARRIVED, TURNED_BACK, STALLED)  # never across to the far side
+
+
+def test_trace_in_loop_without_a_model_and_with_a_tiny_window():
+    """trace_in_loop works on a bare loop frame (no triangles: light behaviour)."""
+    m = hole_model()
+    from algorithms.boundary import summarize
+
+    hole = min(summarize(m).loops, key=lambda fr: np.linalg.norm(fr.points, axis=1).mean())
+    ln = trace_in_loop(None, hole, 0, FieldParams(step=0.05))
+    assert ln.arrived
+    np.testing.assert_allclose(m.mesh.vertices[ln.end_vertex], -hole.points[0], atol=1e-9)

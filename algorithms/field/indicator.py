@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numpy as np
@@ -26,12 +27,13 @@ from numpy.typing import NDArray
 
 from ..boundary import LoopFrame
 from ..params import FieldParams
-from .free_points import FreePoints, grid_args, q2_kernel
+from .free_points import FreePoints, lattice_args, q2_lattice
+from .quality import g0
 from .shielding import Bvh, segment_blocked
 
 Arr = NDArray[np.float64]
 PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: relative weight below which a Gaussian source is skipped
-NO_GROUP = -2
+NO_GROUP = -2  # a point that excludes no group of sources
 SERIAL_BELOW = 16  # fewer points than this: one thread (a tracing step)
 
 
@@ -95,14 +97,16 @@ def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos,
     h00 = h01 = h02 = h10 = h11 = h12 = h20 = h21 = h22 = 0.0
     best = 1e300
     bj = -1
-    for j in range(m):
-        if sgrp[j] == xgrp[i]:
-            continue
-        if xwin[i] >= 0 and sloop[j] == xloop[i]:
-            dp = abs(spos[j] - xpos[i])
-            dp = min(dp, slen[j] - dp)
-            if dp <= xwin[i]:
+    plain = xgrp[i] == NO_GROUP and xwin[i] < 0
+    for j in range(m):  # pass 1: the nearest admissible source (no exp: cheap)
+        if not plain:
+            if sgrp[j] == xgrp[i]:
                 continue
+            if xwin[i] >= 0 and sloop[j] == xloop[i]:
+                dp = abs(spos[j] - xpos[i])
+                dp = min(dp, slen[j] - dp)
+                if dp <= xwin[i]:
+                    continue
         r0 = o[j, 0] - x0
         r1 = o[j, 1] - x1
         r2 = o[j, 2] - x2
@@ -110,7 +114,21 @@ def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos,
         if l2 < best:
             best = l2
             bj = j
-        if l2 < 1e-300:
+    lim = best + prune2  # relative pruning: weight below exp(-16) of the nearest source's
+    for j in range(m):  # pass 2: the field
+        if not plain:
+            if sgrp[j] == xgrp[i]:
+                continue
+            if xwin[i] >= 0 and sloop[j] == xloop[i]:
+                dp = abs(spos[j] - xpos[i])
+                dp = min(dp, slen[j] - dp)
+                if dp <= xwin[i]:
+                    continue
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
+        if l2 > lim or l2 < 1e-300:
             continue
         il = 1.0 / np.sqrt(l2)
         d0, d1, d2 = r0 * il, r1 * il, r2 * il  # (6)
@@ -156,18 +174,56 @@ def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, s
 
 
 @numba.njit(cache=True)
+def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr):
+    """(visible, q2 / L) of the pair X -> source j: shielding (15) and free points (4).
+    bv: the BVH arrays and scale; gr: the free-point lattice arguments of q2_lattice."""
+    if shield and segment_blocked(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6], bv[7],
+                                  bv[8]):
+        return False, 1.0  # (15) delta_XO = 0
+    if not use_fp:
+        return True, 1.0
+    r0 = o[j, 0] - xi[0]
+    r1 = o[j, 1] - xi[1]
+    r2 = o[j, 2] - xi[2]
+    length = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    q2 = q2_lattice(xi, o[j], length, gr[0], gr[1], gr[2], gr[3])  # (4)
+    return True, q2 / length
+
+
+COS_COHERENT = np.cos(np.radians(10.0))  # anchors closer than this angle seen from X may be interpolated
+
+
+@numba.njit(cache=True)
+def _narrow(x, oa, ob):
+    """Do oa and ob subtend less than 10 degrees at x? (only then is coherence trusted)"""
+    a0, a1, a2 = oa[0] - x[0], oa[1] - x[1], oa[2] - x[2]
+    b0, b1, b2 = ob[0] - x[0], ob[1] - x[1], ob[2] - x[2]
+    dot = a0 * b0 + a1 * b1 + a2 * b2
+    na = a0 * a0 + a1 * a1 + a2 * a2
+    nb = b0 * b0 + b1 * b1 + b2 * b2
+    return dot > 0 and dot * dot > COS_COHERENT * COS_COHERENT * na * nb
+
+
+@numba.njit(cache=True)
 def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
-    """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8)."""
+    """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8).
+
+    Visibility coherence (choice, documented): along a run of consecutive sources of one loop,
+    delta and q2/L are evaluated exactly at every ``stride``-th source; between two such anchors
+    that agree (both visible or both shielded) and subtend less than 10 degrees at X, delta is
+    taken from them and q2/L interpolated linearly; otherwise every source in between is tested.
+    So near sources (large angles) are always exact; stride = 1 is exact everywhere.
+    """
     m = o.shape[0]
     xi = x[i]
-    acc = np.zeros(9)
+    bv = (node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale)
+    gr = (g_origin, g_cell, g_dims, g_lattice)
     best = 1e300
     bj = -1
-    pairs = 0
     for j in range(m):  # pass 1: the nearest admissible source
         if sgrp[j] == xgrp[i]:
             continue
@@ -183,9 +239,11 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         if l2 < best:
             best = l2
             bj = j
-    # relative pruning: skip a source whose weight is below ~1e-7 of the nearest one's
-    # ((L * shrink)^2 - best > prune2 with shrink = 1 / (1 + max sum G): q2 >= L * shrink)
-    for j in range(m):  # pass 2: the field
+    # pass 2: the candidates, pruned relative to the nearest source:
+    # (L * shrink)^2 - best > prune2, shrink = 1 / (1 + G(0)) in full mode with free points
+    cand = np.empty(m, dtype=np.int64)
+    nc = 0
+    for j in range(m):
         if sgrp[j] == xgrp[i]:
             continue
         if xwin[i] >= 0 and sloop[j] == xloop[i]:
@@ -199,10 +257,46 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         l2 = r0 * r0 + r1 * r1 + r2 * r2
         if l2 * shrink2 - best > prune2 or l2 < 1e-300:
             continue
-        pairs += 1
-        if shield and segment_blocked(xi, o[j], xv[i], ov[j], node_min, node_max, node_left, node_right,
-                                      node_start, node_count, tri, tri_vertex, scale):
+        cand[nc] = j
+        nc += 1
+    vis = np.ones(nc, dtype=np.bool_)
+    ratio = np.ones(nc)
+    k = 0
+    while k < nc:  # runs of consecutive sources of one loop
+        e = k + 1
+        while e < nc and cand[e] == cand[e - 1] + 1 and sloop[cand[e]] == sloop[cand[k]]:
+            e += 1
+        a = k
+        va, ra = _pair_eval(xi, xv[i], cand[a], o, ov, shield, bv, use_fp, gr)
+        vis[a] = va
+        ratio[a] = ra
+        while a < e - 1:
+            bb = min(a + stride, e - 1)
+            vb, rb = _pair_eval(xi, xv[i], cand[bb], o, ov, shield, bv, use_fp, gr)
+            vis[bb] = vb
+            ratio[bb] = rb
+            if vb == va and _narrow(xi, o[cand[a]], o[cand[bb]]):
+                for t in range(a + 1, bb):
+                    vis[t] = va
+                    ratio[t] = ra + (rb - ra) * (t - a) / (bb - a)
+            else:
+                for t in range(a + 1, bb):
+                    vt, rt = _pair_eval(xi, xv[i], cand[t], o, ov, shield, bv, use_fp, gr)
+                    vis[t] = vt
+                    ratio[t] = rt
+            a = bb
+            va = vb
+            ra = rb
+        k = e
+    acc = np.zeros(9)
+    for c in range(nc):
+        if not vis[c]:
             continue  # (15) delta_XO = 0
+        j = cand[c]
+        r0 = o[j, 0] - x[i, 0]
+        r1 = o[j, 1] - x[i, 1]
+        r2 = o[j, 2] - x[i, 2]
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
         length = np.sqrt(l2)
         d0, d1, d2 = r0 / length, r1 / length, r2 / length  # (6)
         t0, t1, t2 = tau[j, 0], tau[j, 1], tau[j, 2]
@@ -210,12 +304,8 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         s1 = t2 * d0 - t0 * d2
         s2 = t0 * d1 - t1 * d0
         q4 = 0.5 * (1.0 - (d0 * b[j, 0] + d1 * b[j, 1] + d2 * b[j, 2]))  # (7)
-        if use_fp:
-            q2 = q2_kernel(xi, o[j], length, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2,
-                           g_kernel)  # (4)
-            q12 = _q1(q2 * q2, lc2, kernel)  # (8)
-        else:
-            q12 = _q1(l2, lc2, kernel)
+        q2 = ratio[c] * length  # (4); = L without free points
+        q12 = _q1(q2 * q2, lc2, kernel)  # (8)
         w = h[j] * q12 * (1.0 + ki * q4)  # (13)
         acc[0] += w * d0 * s0  # (12)-(14): h g d s^T
         acc[1] += w * d0 * s1
@@ -226,38 +316,38 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         acc[6] += w * d2 * s0
         acc[7] += w * d2 * s1
         acc[8] += w * d2 * s2
-    for k in range(9):
-        out_h[i, k] = acc[k]
+    for k2 in range(9):
+        out_h[i, k2] = acc[k2]
     out_near[i] = bj
     out_dist[i] = np.sqrt(best) if bj >= 0 else np.inf
-    out_pairs[i] = pairs
+    out_pairs[i] = nc
 
 
 @numba.njit(cache=True, parallel=True)
 def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in numba.prange(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
 
 
 @numba.njit(cache=True)
 def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in range(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2,
+                lc2, ki, kernel, prune2, shrink2, stride,
                 shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
-                use_fp, g_origin, g_cell, g_dims, g_start, g_points, g0v, rc2, cut2, g_kernel,
+                use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
 
 
@@ -300,21 +390,86 @@ def top_normal(H: Arr, t: Arr, hint: Arr | None = None) -> tuple[Arr, Arr]:
 
 @numba.njit(cache=True)
 def _normal_one(hm, t, hint):
-    """(16b) for one point: top eigenvector of P H^T H P (P = I - t t^T), sign n . hint >= 0.
-    Returns (n, H n)."""
-    tn = np.sqrt(t @ t)
-    tt = t / tn if tn > 0 else t * 0.0
-    P = np.eye(3) - np.outer(tt, tt)
-    HP = hm @ P
-    w, v = np.linalg.eigh(HP.T @ HP)
-    n = v[:, 2].copy()
-    n = n - (n @ tt) * tt
-    nn = np.sqrt(n @ n)
-    if nn > 0:
-        n = n / nn
-    if n @ hint < 0:
-        n = -n
-    return n, hm @ n
+    """(16b) for one point in closed form: with e1, e2 an orthonormal basis of the plane normal
+    to t, |H n|^2 for n = cos(phi) e1 + sin(phi) e2 is a 2x2 quadratic form [[a, b], [b, c]]
+    whose top eigenvector has phi = atan2(2 b, a - c) / 2 (the same n as the top eigenvector of
+    P H^T H P). Sign n . hint >= 0. Returns (n, H n)."""
+    tn = np.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+    t0, t1, t2 = t[0] / tn, t[1] / tn, t[2] / tn
+    if abs(t0) < 0.9:  # e1 = unit(t x x_axis) or unit(t x y_axis)
+        e0, e1_, e2_ = 0.0, t2, -t1
+    else:
+        e0, e1_, e2_ = -t2, 0.0, t0
+    en = np.sqrt(e0 * e0 + e1_ * e1_ + e2_ * e2_)
+    e0, e1_, e2_ = e0 / en, e1_ / en, e2_ / en
+    f0, f1, f2 = t1 * e2_ - t2 * e1_, t2 * e0 - t0 * e2_, t0 * e1_ - t1 * e0  # e2 = t x e1
+    u0 = hm[0, 0] * e0 + hm[0, 1] * e1_ + hm[0, 2] * e2_
+    u1 = hm[1, 0] * e0 + hm[1, 1] * e1_ + hm[1, 2] * e2_
+    u2 = hm[2, 0] * e0 + hm[2, 1] * e1_ + hm[2, 2] * e2_
+    v0 = hm[0, 0] * f0 + hm[0, 1] * f1 + hm[0, 2] * f2
+    v1 = hm[1, 0] * f0 + hm[1, 1] * f1 + hm[1, 2] * f2
+    v2 = hm[2, 0] * f0 + hm[2, 1] * f1 + hm[2, 2] * f2
+    a = u0 * u0 + u1 * u1 + u2 * u2
+    b = u0 * v0 + u1 * v1 + u2 * v2
+    c = v0 * v0 + v1 * v1 + v2 * v2
+    phi = 0.5 * np.arctan2(2.0 * b, a - c)
+    cp, sp = np.cos(phi), np.sin(phi)
+    n = np.empty(3)
+    n[0], n[1], n[2] = cp * e0 + sp * f0, cp * e1_ + sp * f1, cp * e2_ + sp * f2
+    if n[0] * hint[0] + n[1] * hint[1] + n[2] * hint[2] < 0:
+        n[0], n[1], n[2] = -n[0], -n[1], -n[2]
+    f = np.empty(3)
+    for k in range(3):
+        f[k] = hm[k, 0] * n[0] + hm[k, 1] * n[1] + hm[k, 2] * n[2]
+    return n, f
+
+
+@numba.njit(cache=True, fastmath=True)
+def _h_one_light(x, o, tau, b, h, lc2, ki, kernel, prune2):
+    """Light-mode H at one point against every source (no exclusions): the tracing step."""
+    m = o.shape[0]
+    x0, x1, x2 = x[0], x[1], x[2]
+    best = 1e300
+    for j in range(m):
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
+        best = min(best, l2)
+    lim = best + prune2
+    hm = np.zeros((3, 3))
+    for j in range(m):
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
+        l2 = r0 * r0 + r1 * r1 + r2 * r2
+        if l2 > lim or l2 < 1e-300:
+            continue
+        il = 1.0 / np.sqrt(l2)
+        d0, d1, d2 = r0 * il, r1 * il, r2 * il  # (6)
+        t0, t1, t2 = tau[j, 0], tau[j, 1], tau[j, 2]
+        s0 = t1 * d2 - t2 * d1  # s_O = tau_O x d
+        s1 = t2 * d0 - t0 * d2
+        s2 = t0 * d1 - t1 * d0
+        q4 = 0.5 * (1.0 - (d0 * b[j, 0] + d1 * b[j, 1] + d2 * b[j, 2]))  # (7)
+        w = h[j] * _q1(l2, lc2, kernel) * (1.0 + ki * q4)  # (13)
+        hm[0, 0] += w * d0 * s0  # (12)-(14)
+        hm[0, 1] += w * d0 * s1
+        hm[0, 2] += w * d0 * s2
+        hm[1, 0] += w * d1 * s0
+        hm[1, 1] += w * d1 * s1
+        hm[1, 2] += w * d1 * s2
+        hm[2, 0] += w * d2 * s0
+        hm[2, 1] += w * d2 * s1
+        hm[2, 2] += w * d2 * s2
+    return hm
+
+
+@numba.njit(cache=True)
+def _sample_light(x, t, hint, o, tau, b, h, lc2, ki, kernel, prune2):
+    """One tracing step in light mode: H, then n from (16b) and F = H n, in one call."""
+    hm = _h_one_light(x, o, tau, b, h, lc2, ki, kernel, prune2)
+    return _normal_one(hm, t, hint)
 
 
 class IndicatorField:
@@ -337,15 +492,27 @@ class IndicatorField:
         self.shield = bool(params.shielding and bvh is not None and bvh.n_triangles)
         self.chunk = int(chunk)
         self.kernel = 0 if params.q1_kernel == "gauss" else 1
-        gmax = self.free.g_max if self.free is not None else 0.0
-        # full mode: a Gaussian source is skipped when its weight is below exp(-16) of the nearest
-        # one's even after free points shorten it as much as they can (q2 >= L / (1 + max sum G));
+        # pruning in full mode (choice, documented): free points may rescue a pair by the factor
+        # 1 + G(0) (one fully trusted free point's worth), not by the bound 1 + max sum G, which on
+        # dense free points would disable pruning altogether (measured: 12x slower, bench/field.py)
+        gmax = g0(self.free.kt) if self.free is not None else 0.0
+        # a Gaussian source is skipped when its weight is below exp(-16) of the nearest one's (in
+        # full mode even after free points shorten it as much as they can: q2 >= L / (1 + max sum G));
         # the heavy-tailed kernel is never pruned.
         self.prune = PRUNE_GAUSS * self.lc if self.kernel == 0 else np.inf
         self.shrink = 1.0 / (1.0 + gmax)
+        self._prune2 = min(self.prune * self.prune, 1e300) if np.isfinite(self.prune) else 1e300
 
     def sample_one(self, x: Arr, tangent: Arr, hint: Arr) -> tuple[Arr, Arr, float]:
         """One point, no exclusions (a tracing step): (n, F = H n, |F|) with n from (16b)."""
+        if not self.full:
+            S = self.sources
+            if len(S) == 0:
+                return np.asarray(hint, dtype=np.float64), np.zeros(3), 0.0
+            n, f = _sample_light(np.asarray(x, dtype=np.float64), np.asarray(tangent, dtype=np.float64),
+                                 np.asarray(hint, dtype=np.float64), S.points, S.tangent, S.outward, S.charge,
+                                 self.lc * self.lc, float(self.params.ki), self.kernel, self._prune2)
+            return n, f, float(np.sqrt(f @ f))
         ev = self.evaluate(np.asarray(x, dtype=np.float64).reshape(1, 3))
         n, f = _normal_one(ev.H[0], np.asarray(tangent, dtype=np.float64), np.asarray(hint, dtype=np.float64))
         return n, f, float(np.sqrt(f @ f))
@@ -376,27 +543,28 @@ class IndicatorField:
         pairs = 0
         lc2 = self.lc * self.lc
         prune2 = self.prune * self.prune if np.isfinite(self.prune) else np.inf
+        prune2 = min(prune2, 1e300)
         p = self.params
         if n == 0 or len(S) == 0:
             return Evaluation(H.reshape(n, 3, 3), near, dist, 0)
         for a in range(0, n, self.chunk):
             sl = slice(a, min(a + self.chunk, n))
             if not self.full:
-                kern = _field_light if sl.stop - sl.start >= SERIAL_BELOW else _field_light_serial
-                kern(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
-                             S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2, H[sl], near[sl], dist[sl])
+                lk: Any = _field_light if sl.stop - sl.start >= SERIAL_BELOW else _field_light_serial
+                lk(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
+                   S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2, H[sl], near[sl], dist[sl])
                 pairs += (sl.stop - sl.start) * len(S)
             else:
                 bvh = self.bvh
                 barr = bvh.arrays() if bvh is not None else _EMPTY_BVH
-                garr = grid_args(self.free) if self.free is not None else _EMPTY_GRID
+                garr = lattice_args(self.free) if self.free is not None else _EMPTY_GRID
                 cnt = np.zeros(sl.stop - sl.start, dtype=np.int64)
-                kern = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
-                kern(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
-                            S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
-                     self.shrink ** 2,
-                            self.shield, *barr, bvh.scale if bvh is not None else 1.0,
-                            self.free is not None, *garr, H[sl], near[sl], dist[sl], cnt)
+                fk: Any = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
+                fk(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
+                   S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
+                   self.shrink ** 2, int(p.shield_stride),
+                   self.shield, *barr, bvh.scale if bvh is not None else 1.0,
+                   self.free is not None, *garr, H[sl], near[sl], dist[sl], cnt)
                 pairs += int(cnt.sum())
         return Evaluation(H.reshape(n, 3, 3), near, dist, pairs)
 
@@ -404,8 +572,7 @@ class IndicatorField:
 _EMPTY_BVH = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
               np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
               np.zeros((0, 3), dtype=np.int64))
-_EMPTY_GRID = (np.zeros(3), 1.0, np.ones(3, dtype=np.int64), np.zeros(2, dtype=np.int64), np.zeros((0, 3)), 0.0, 1.0,
-               0.0, 0)
+_EMPTY_GRID = (np.zeros(3), 1.0, np.ones(3, dtype=np.int64), np.zeros(1))
 
 
 def direct_tensor(x: Arr, sources: Sources, params: FieldParams, lc: float) -> Arr:
