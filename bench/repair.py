@@ -405,7 +405,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cases", help="comma-separated case names (default: all)")
     ap.add_argument("--peers", help="comma-separated substrings of method labels (default: all)")
     ap.add_argument("--samples", type=int, default=10000, help="surface samples a side for the distances")
-    ap.add_argument("--timeout", type=float, default=120.0, help="seconds per tool and case")
+    ap.add_argument("--timeout", type=float, default=150.0, help="seconds per tool and case")
     ap.add_argument("--json", help="also write the rows as JSON here")
     ap.add_argument("--no-write", action="store_true", help="do not touch docs/benchmarks.md")
     ap.add_argument("--from-json", help="only rewrite the table from rows saved with --json")
