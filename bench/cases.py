@@ -120,10 +120,11 @@ def shared_cases() -> list[BenchCase]:
     out.append(_from_case(gen.cut(bun, isl, name="bunny-islands", free_points=300, jitter=0.0005, seed=9,
                                   description="the closed bunny cut into five islands by two crossing bands, free "
                                               "points in the bands"), 0, 5, 6))
-    bh = ball(bun, surface_point(bun, [1, -0.3, 0.1]), 0.07 * bd) | ball(bun, surface_point(bun, [0, 0, 1]), 0.06 * bd) \
-        | ball(bun, surface_point(bun, [-1, 0, 0]), 0.06 * bd)
+    bh = ball(bun, surface_point(bun, [1, -0.3, 0.1]), 0.07 * bd) \
+        | ball(bun, surface_point(bun, [0, 0, 1]), 0.06 * bd) | ball(bun, surface_point(bun, [-1, 0, 0]), 0.06 * bd)
     out.append(_from_case(gen.cut(bun, bh, name="bunny-holes",
-                                  description="the closed bunny with three holes on its body (radius 6-7 % of the diagonal)"), 0, 1, 3))
+                                  description="the closed bunny with three holes on its body (radius 6-7 % of "
+                                              "the diagonal)"), 0, 1, 3))
     return out
 
 

@@ -281,3 +281,24 @@ def test_darn_a_bare_loop_without_surrounding_faces():
         if method in ("liepa-refine", "liepa-fair"):
             assert len(p.new_vertices) > 20  # the loop's own edge lengths set the scale
             assert metrics.min_angles(vv, p.faces).min() > 15.0
+
+
+def test_refine_splits_a_flat_ear():
+    # a near-flat ear over three almost collinear border vertices passes the centroid test; with
+    # flips off (as when a flip is refused) only the obtuse-edge split removes it
+    from algorithms.darning.refine import refine
+
+    n = 12
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    v = np.stack([np.cos(t), np.sin(t), np.zeros(n)], 1)
+    v[1] = (v[0] + v[2]) / 2 + [0.0, 0.0, 1e-3]  # vertex 1 nearly on the chord 0-2
+    rest = np.r_[0, np.arange(2, n)]
+    faces = np.vstack([[[2, 1, 0]], rest[triangulate(v[rest])]])
+    none = np.zeros((0, 3), dtype=np.int64)
+    r0 = refine(v, none, faces, obtuse=None, flip=False, density=1e-6)
+    r1 = refine(v, none, faces, flip=False, density=1e-6)
+    assert metrics.triangle_angles(r0.vertices, r0.faces).max() > 170.0
+    assert metrics.triangle_angles(r1.vertices, r1.faces).max() <= 150.0 + 1e-9
+    assert r1.splits >= 1 and len(r1.vertices) == n + r1.splits
+    topo = metrics.topology(r1.faces)
+    assert topo.boundary_loops == 1 and topo.oriented and topo.euler == 1

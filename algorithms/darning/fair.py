@@ -105,43 +105,59 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
     is_free[free] = True
     fixed = np.flatnonzero(~is_free)
     for _ in range(1 if weights == "uniform" else iterations):  # sequential: cotan weights follow the positions
-        L = uniform_laplacian(len(v), faces) if weights == "uniform" else cotan_laplacian(out, faces)
-        k = ORDERS[operator]
-        powers = [L]
-        for _ in range(k - 1):  # L^k: k = 3 also matches curvature across the border
-            powers.append((powers[-1] @ L).tocsr())
-        rows = powers[-1][free]
-        if k > 1 and bare is not None and len(bare):
-            # the row of L^j at f reads L at the vertices up to j-1 rings from f: a free vertex j
-            # rings from a bare vertex solves L^min(k, j) = 0
-            adj = (abs(L) + abs(L.T)) > 0
-            dist = np.full(len(v), k, dtype=np.int64)
-            front = np.zeros(len(v), dtype=bool)
-            front[np.asarray(bare, dtype=np.int64)] = True
-            seen = front.copy()
-            for j in range(1, k):  # sequential: ring after ring
-                front = (adj @ front.astype(np.float64) > 0) & ~seen
-                dist[front] = j
-                seen |= front
-            order = dist[free]
-            if (order < k).any():
-                rows = _mixed_rows(powers, free, order)
-        rhs = -(rows[:, fixed] @ out[fixed])
-        out[free] = _solve(rows[:, free].tocsr(), rhs, out[free])
+        if weights == "uniform":
+            out[free] = _fair_solve(uniform_laplacian(len(v), faces), out, free, fixed, ORDERS[operator], bare)
+            continue
+        try:
+            out[free] = _fair_solve(cotan_laplacian(out, faces), out, free, fixed, ORDERS[operator], bare, strict=True)
+        except RuntimeError:  # singular cotangent system (degenerate triangles): uniform weights
+            out[free] = _fair_solve(uniform_laplacian(len(v), faces), out, free, fixed, ORDERS[operator], bare)
     return out
 
 
-def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64]) -> NDArray[np.float64]:
+def _fair_solve(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[np.int64], fixed: NDArray[np.int64],
+                k: int, bare: NDArray[np.int64] | None, *, strict: bool = False) -> NDArray[np.float64]:
+    """Positions of the free vertices with L^k x = 0 there (lower powers near bare vertices)."""
+    powers = [L]
+    for _ in range(k - 1):  # L^k: k = 3 also matches curvature across the border
+        powers.append((powers[-1] @ L).tocsr())
+    rows = powers[-1][free]
+    if k > 1 and bare is not None and len(bare):
+        # the row of L^j at f reads L at the vertices up to j-1 rings from f: a free vertex j
+        # rings from a bare vertex solves L^min(k, j) = 0
+        adj = (abs(L) + abs(L.T)) > 0
+        dist = np.full(len(out), k, dtype=np.int64)
+        front = np.zeros(len(out), dtype=bool)
+        front[np.asarray(bare, dtype=np.int64)] = True
+        seen = front.copy()
+        for j in range(1, k):  # sequential: ring after ring
+            front = (adj @ front.astype(np.float64) > 0) & ~seen
+            dist[front] = j
+            seen |= front
+        order = dist[free]
+        if (order < k).any():
+            rows = _mixed_rows(powers, free, order)
+    rhs = -(rows[:, fixed] @ out[fixed])
+    return _solve(rows[:, free].tocsr(), rhs, out[free], strict=strict)
+
+
+def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64], *,
+           strict: bool = False) -> NDArray[np.float64]:
     """A x = rhs by sparse LU. A free vertex whose row vanished (all its faces degenerate) keeps its
     position; a system that is still singular (a free region with no path to a fixed vertex) is
-    solved with a tiny diagonal shift towards the current positions."""
+    solved with a tiny diagonal shift towards the current positions (``strict``: raise instead)."""
     zero = np.asarray(abs(A).sum(axis=1)).ravel() == 0
     if zero.any():
         A = (A + sp.diags(zero.astype(np.float64))).tocsr()
         rhs = np.where(zero[:, None], x0, rhs)
     try:
-        return splu(A.tocsc()).solve(rhs)
+        x = splu(A.tocsc()).solve(rhs)
+        if not np.all(np.isfinite(x)):
+            raise RuntimeError("non-finite solution")
+        return x
     except RuntimeError:  # exactly singular
+        if strict:
+            raise
         eps = 1e-9 * float(abs(A).max())
         return splu((A + eps * sp.identity(A.shape[0])).tocsc()).solve(rhs + eps * x0)
 

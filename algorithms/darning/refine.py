@@ -145,12 +145,17 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
 
 def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch: NDArray[np.int64], *,
            density: float = np.sqrt(2.0), scale: NDArray[np.float64] | None = None, max_rounds: int = 60,
-           flip: bool = True, label: NDArray[np.int64] | None = None) -> Refined:
+           flip: bool = True, label: NDArray[np.int64] | None = None,
+           obtuse: float | None = 150.0) -> Refined:
     """Refine the patch faces ``patch`` (indices into ``vertices``) next to ``fixed_faces``.
 
     density: alpha of the split test (1 = the spec's test literally; sqrt 2 = Liepa's).
     scale: optional (V,) l(v) to use instead of the mean fixed edge length (NaN = unknown).
     Patch vertices without a scale (no fixed edge) get the mean of the known ones.
+    obtuse: **(choice)** when nothing splits or flips any more, a patch-interior edge facing an
+        angle above this many degrees is split at its midpoint, and the rounds go on (a
+        near-flat sliver, e.g. Liepa's zero-area ear over three almost collinear border vertices,
+        passes the centroid test and no flip can remove it); None: the spec's rounds only.
     """
     if not density > 0:
         raise ValueError(f"density must be > 0, got {density}")
@@ -193,6 +198,56 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
             f, nflip = relax(P, f, fixed_faces)
             flips += nflip
         if not ns and not nflip:
-            break
+            if obtuse is None:
+                break
+            P = np.vstack(pts) if len(pts) > 1 else pts[0]
+            f, lab, mids, lm = _split_obtuse(P, f, lab, lv, nv, np.radians(obtuse))
+            if not len(mids):
+                break
+            pts.append(mids)
+            lv = np.concatenate([lv, lm])
+            nv += len(mids)
+            splits += len(mids)
     P = np.vstack(pts) if len(pts) > 1 else pts[0]
     return Refined(P, f, lab, splits, flips, rounds)
+
+
+def _split_obtuse(p: NDArray[np.float64], f: NDArray[np.int64], lab: NDArray[np.int64], lv: NDArray[np.float64],
+                  nv: int, limit: float) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64],
+                                                  NDArray[np.float64]]:
+    """Split the patch-interior edges facing an angle above ``limit`` (radians) at their midpoints;
+    each face takes part in at most one split. Returns (faces, labels, new points, their l)."""
+    he = halfedges(f)
+    key = he[:, 0] * len(p) + he[:, 1]
+    order = np.argsort(key)
+    skey = key[order]
+    twin = he[:, 1] * len(p) + he[:, 0]
+    pos = np.minimum(np.searchsorted(skey, twin), len(key) - 1)
+    h1 = np.flatnonzero((skey[pos] == twin) & (he[:, 0] < he[:, 1]))
+    h2 = order[pos[h1]]
+    a, b = he[h1, 0], he[h1, 1]
+    c = f[h1 // 3, (h1 % 3 + 2) % 3]
+    d = f[h2 // 3, (h2 % 3 + 2) % 3]
+    worst = np.maximum(_angle_at(p, c, a, b), _angle_at(p, d, a, b))
+    cand = np.flatnonzero(worst > limit)
+    empty = np.zeros((0, 3))
+    if not len(cand):
+        return f, lab, empty, np.zeros(0)
+    cand = cand[np.argsort(-worst[cand], kind="stable")]
+    f1, f2 = h1[cand] // 3, h2[cand] // 3
+    taken = np.zeros(len(f), dtype=bool)
+    keep = []
+    for i in range(len(cand)):  # sequential: a greedy independent set, worst edge first (few edges)
+        if not taken[f1[i]] and not taken[f2[i]]:
+            taken[f1[i]] = taken[f2[i]] = True
+            keep.append(i)
+    sel = cand[keep]
+    f1, f2 = h1[sel] // 3, h2[sel] // 3
+    a, b, c, d = a[sel], b[sel], c[sel], d[sel]
+    m = nv + np.arange(len(sel))
+    out = f.copy()
+    out[f1] = np.stack([a, m, c], 1)
+    out[f2] = np.stack([b, m, d], 1)
+    out = np.vstack([out, np.stack([m, b, c], 1), np.stack([m, a, d], 1)])
+    lab = np.concatenate([lab, lab[f1], lab[f2]])
+    return out, lab, (p[a] + p[b]) / 2, (lv[a] + lv[b]) / 2
