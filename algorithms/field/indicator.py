@@ -29,7 +29,7 @@ from ..boundary import LoopFrame
 from ..params import FieldParams
 from .free_points import FreePoints, lattice_args, q2_lattice
 from .quality import g0
-from .shielding import Bvh, segment_blocked
+from .shielding import Bvh, segment_blocked_hint
 
 Arr = NDArray[np.float64]
 PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: relative weight below which a Gaussian source is skipped
@@ -174,20 +174,30 @@ def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, s
 
 
 @numba.njit(cache=True)
-def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr):
-    """(visible, q2 / L) of the pair X -> source j: shielding (15) and free points (4).
-    bv: the BVH arrays and scale; gr: the free-point lattice arguments of q2_lattice."""
-    if shield and segment_blocked(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6], bv[7],
-                                  bv[8]):
-        return False, 1.0  # (15) delta_XO = 0
-    if not use_fp:
-        return True, 1.0
-    r0 = o[j, 0] - xi[0]
-    r1 = o[j, 1] - xi[1]
-    r2 = o[j, 2] - xi[2]
-    length = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
-    q2 = q2_lattice(xi, o[j], length, gr[0], gr[1], gr[2], gr[3])  # (4)
-    return True, q2 / length
+def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr, lim, hint):
+    """(visible, q2 / L, occluder) of the pair X -> source j: free points (4), then shielding (15).
+
+    q2 comes first: a pair whose effective length is still beyond the pruning limit (q2^2 > lim,
+    its weight below exp(-16) of the nearest source's, the rule of the candidate pass) is dropped
+    without the costly segment test. hint: the last occluder found from X (tested first; the
+    returned occluder is the new hint). bv: the BVH arrays and scale; gr: the free-point lattice
+    arguments of q2_lattice."""
+    ratio = 1.0
+    if use_fp:
+        r0 = o[j, 0] - xi[0]
+        r1 = o[j, 1] - xi[1]
+        r2 = o[j, 2] - xi[2]
+        length = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+        q2 = q2_lattice(xi, o[j], length, gr[0], gr[1], gr[2], gr[3])  # (4)
+        if q2 * q2 > lim:
+            return False, 1.0, hint  # negligible weight: pruned like the candidate pass does
+        ratio = q2 / length
+    if shield:
+        hit, occ = segment_blocked_hint(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6],
+                                        bv[7], bv[8], hint)
+        if hit:
+            return False, 1.0, occ  # (15) delta_XO = 0
+    return True, ratio, hint
 
 
 COS_COHERENT = np.cos(np.radians(10.0))  # anchors closer than this angle seen from X may be interpolated
@@ -261,18 +271,20 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         nc += 1
     vis = np.ones(nc, dtype=np.bool_)
     ratio = np.ones(nc)
+    lim = best + prune2  # q2^2 beyond this: weight below exp(-16) of the nearest source's
+    occ = -1  # the last occluding triangle (tested first for the next segment from X)
     k = 0
     while k < nc:  # runs of consecutive sources of one loop
         e = k + 1
         while e < nc and cand[e] == cand[e - 1] + 1 and sloop[cand[e]] == sloop[cand[k]]:
             e += 1
         a = k
-        va, ra = _pair_eval(xi, xv[i], cand[a], o, ov, shield, bv, use_fp, gr)
+        va, ra, occ = _pair_eval(xi, xv[i], cand[a], o, ov, shield, bv, use_fp, gr, lim, occ)
         vis[a] = va
         ratio[a] = ra
         while a < e - 1:
             bb = min(a + stride, e - 1)
-            vb, rb = _pair_eval(xi, xv[i], cand[bb], o, ov, shield, bv, use_fp, gr)
+            vb, rb, occ = _pair_eval(xi, xv[i], cand[bb], o, ov, shield, bv, use_fp, gr, lim, occ)
             vis[bb] = vb
             ratio[bb] = rb
             if vb == va and _narrow(xi, o[cand[a]], o[cand[bb]]):
@@ -281,7 +293,7 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
                     ratio[t] = ra + (rb - ra) * (t - a) / (bb - a)
             else:
                 for t in range(a + 1, bb):
-                    vt, rt = _pair_eval(xi, xv[i], cand[t], o, ov, shield, bv, use_fp, gr)
+                    vt, rt, occ = _pair_eval(xi, xv[i], cand[t], o, ov, shield, bv, use_fp, gr, lim, occ)
                     vis[t] = vt
                     ratio[t] = rt
             a = bb

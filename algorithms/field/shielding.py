@@ -143,31 +143,31 @@ def mesh_bvh(mesh: Mesh) -> Bvh:
     return build_bvh(mesh.vertices, mesh.faces)
 
 
-@numba.njit(cache=True)
-def _seg_box(x, d, node_min, node_max, nd, pad):
-    """Does the segment X + t D, t in [0, 1], meet box nd padded by pad? (slab test)"""
+@numba.njit(cache=True, inline="always")
+def _seg_box(x, inv, node_min, node_max, nd, pad):
+    """Does the segment X + t D, t in [0, 1], meet box nd padded by pad? (slab test; inv = 1 / D
+    per axis, precomputed once per segment: +-inf on an axis D is parallel to)"""
     t0 = 0.0
     t1 = 1.0
     for k in range(3):
         lo = node_min[nd, k] - pad
         hi = node_max[nd, k] + pad
         xk = x[k]
-        dk = d[k]
-        if abs(dk) < 1e-300:
+        ik = inv[k]
+        if np.isinf(ik):  # parallel to this slab: inside it or not at all
             if xk < lo or xk > hi:
                 return False
-        else:
-            inv = 1.0 / dk
-            ta = (lo - xk) * inv
-            tb = (hi - xk) * inv
-            if ta > tb:
-                ta, tb = tb, ta
-            if ta > t0:
-                t0 = ta
-            if tb < t1:
-                t1 = tb
-            if t0 > t1:
-                return False
+            continue
+        ta = (lo - xk) * ik
+        tb = (hi - xk) * ik
+        if ta > tb:
+            ta, tb = tb, ta
+        if ta > t0:
+            t0 = ta
+        if tb < t1:
+            t1 = tb
+        if t0 > t1:
+            return False
     return True
 
 
@@ -234,13 +234,30 @@ def _seg_tri(x, d, tri, k, scale):
     return True
 
 
+@numba.njit(cache=True, inline="always")
+def _skip(tv, x_vertex, o_vertex):
+    """Is the triangle with vertex numbers tv incident to O (or to X, when X is a vertex)?"""
+    if tv[0] == o_vertex or tv[1] == o_vertex or tv[2] == o_vertex:
+        return True
+    return x_vertex >= 0 and (tv[0] == x_vertex or tv[1] == x_vertex or tv[2] == x_vertex)
+
+
 @numba.njit(cache=True)
-def segment_blocked(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                    node_count, tri, tri_vertex, scale):
-    """(15) True when the open segment x -> o crosses a triangle incident to neither x_vertex nor o_vertex."""
+def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
+                         node_count, tri, tri_vertex, scale, hint):
+    """(15) as segment_blocked, and the occluding triangle: returns (blocked, triangle or -1).
+
+    hint: a triangle to test first (-1: none), e.g. the last occluder found from the same X:
+    segments from one point to neighbouring sources are often blocked by the same triangle, and
+    the answer is the same either way (it only saves the traversal when the hint blocks)."""
     if len(node_min) == 0 or len(tri) == 0:
-        return False
+        return False, -1
     d = o - x
+    if hint >= 0 and not _skip(tri_vertex[hint], x_vertex, o_vertex) and _seg_tri(x, d, tri, hint, scale):
+        return True, hint
+    inv = np.empty(3)
+    for k in range(3):
+        inv[k] = 1.0 / d[k] if d[k] != 0.0 else np.inf
     pad = 1e-9 * scale
     stack = np.empty(64, dtype=np.int64)
     stack[0] = 0
@@ -248,23 +265,28 @@ def segment_blocked(x, o, x_vertex, o_vertex, node_min, node_max, node_left, nod
     while top > 0:
         top -= 1
         nd = stack[top]
-        if not _seg_box(x, d, node_min, node_max, nd, pad):
+        if not _seg_box(x, inv, node_min, node_max, nd, pad):
             continue
         if node_left[nd] < 0:
             s = node_start[nd]
             for k in range(s, s + node_count[nd]):
-                tv = tri_vertex[k]
-                if tv[0] == o_vertex or tv[1] == o_vertex or tv[2] == o_vertex:
-                    continue
-                if x_vertex >= 0 and (tv[0] == x_vertex or tv[1] == x_vertex or tv[2] == x_vertex):
+                if k == hint or _skip(tri_vertex[k], x_vertex, o_vertex):
                     continue
                 if _seg_tri(x, d, tri, k, scale):
-                    return True
+                    return True, k
         else:
             stack[top] = node_left[nd]
             stack[top + 1] = node_right[nd]
             top += 2
-    return False
+    return False, -1
+
+
+@numba.njit(cache=True)
+def segment_blocked(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
+                    node_count, tri, tri_vertex, scale):
+    """(15) True when the open segment x -> o crosses a triangle incident to neither x_vertex nor o_vertex."""
+    return segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
+                                node_count, tri, tri_vertex, scale, -1)[0]
 
 
 @numba.njit(cache=True, parallel=True)
