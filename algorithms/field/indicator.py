@@ -194,7 +194,7 @@ def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr, lim, hint):
         ratio = q2 / length
     if shield:
         hit, occ = segment_blocked_hint(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6],
-                                        bv[7], bv[8], hint)
+                                        bv[7], bv[8], bv[9], hint)
         if hit:
             return False, 1.0, occ  # (15) delta_XO = 0
     return True, ratio, hint
@@ -217,7 +217,8 @@ def _narrow(x, oa, ob):
 @numba.njit(cache=True)
 def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8).
@@ -230,7 +231,7 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     """
     m = o.shape[0]
     xi = x[i]
-    bv = (node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale)
+    bv = (node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal, scale)
     gr = (g_origin, g_cell, g_dims, g_lattice)
     best = 1e300
     bj = -1
@@ -338,13 +339,15 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
 @numba.njit(cache=True, parallel=True)
 def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in numba.prange(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
 
@@ -352,13 +355,15 @@ def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, s
 @numba.njit(cache=True)
 def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in range(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
 
@@ -583,7 +588,7 @@ class IndicatorField:
 
 _EMPTY_BVH = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
               np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
-              np.zeros((0, 3), dtype=np.int64))
+              np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3)))
 _EMPTY_GRID = (np.zeros(3), 1.0, np.ones(3, dtype=np.int64), np.zeros(1))
 
 

@@ -33,7 +33,8 @@ class Bvh:
 
     node_min, node_max: (K, 3); node_left, node_right: (K,) child nodes (-1 at leaves);
     node_start, node_count: (K,) slice of the reordered triangles at leaves;
-    tri: (F, 3, 3) reordered corner coordinates; tri_vertex: (F, 3) their vertex numbers.
+    tri: (F, 3, 3) reordered corner coordinates; tri_vertex: (F, 3) their vertex numbers;
+    tri_normal: (F, 3) unit normals (zero for a degenerate triangle), for the quick plane-side test.
     """
 
     node_min: NDArray[np.float64]
@@ -44,6 +45,7 @@ class Bvh:
     node_count: NDArray[np.int64]
     tri: NDArray[np.float64]
     tri_vertex: NDArray[np.int64]
+    tri_normal: NDArray[np.float64]
     scale: float  # bounding-box diagonal (for tolerances)
 
     @property
@@ -52,7 +54,7 @@ class Bvh:
 
     def arrays(self) -> tuple:
         return (self.node_min, self.node_max, self.node_left, self.node_right, self.node_start,
-                self.node_count, self.tri, self.tri_vertex)
+                self.node_count, self.tri, self.tri_vertex, self.tri_normal)
 
 
 def _median_sort(order: NDArray[np.int64], cen: NDArray[np.float64], ss: NDArray[np.int64],
@@ -87,7 +89,7 @@ def build_bvh(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Bvh:
     if nf == 0:
         z = np.zeros(0, dtype=np.int64)
         return Bvh(np.zeros((0, 3)), np.zeros((0, 3)), z, z, z, z, np.zeros((0, 3, 3)),
-                   np.zeros((0, 3), dtype=np.int64), max(scale, 1e-300))
+                   np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3)), max(scale, 1e-300))
     tri = v[f]
     cen = tri.mean(axis=1)
     order = np.arange(nf)
@@ -135,8 +137,11 @@ def build_bvh(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Bvh:
         nmax[pa] = -np.inf
         np.minimum.at(nmin, pa, nmin[ids])
         np.maximum.at(nmax, pa, nmax[ids])
+    nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    nl = np.linalg.norm(nrm, axis=1, keepdims=True)
+    nrm = np.divide(nrm, nl, out=np.zeros_like(nrm), where=nl > 0)
     return Bvh(nmin, nmax, left, right, start.astype(np.int64), count.astype(np.int64),
-               np.ascontiguousarray(tri), np.ascontiguousarray(f), max(scale, 1e-300))
+               np.ascontiguousarray(tri), np.ascontiguousarray(f), np.ascontiguousarray(nrm), max(scale, 1e-300))
 
 
 def mesh_bvh(mesh: Mesh) -> Bvh:
@@ -235,6 +240,18 @@ def _seg_tri(x, d, tri, k, scale):
 
 
 @numba.njit(cache=True, inline="always")
+def _same_side(x, o, tri, tri_normal, k, tol):
+    """Quick rejection before _seg_tri: X and O strictly on one side of triangle k's plane (beyond
+    tol, so a segment in the plane still gets the coplanar test): the segment cannot cross it.
+    Never changes _seg_tri's answer; it only spares its arithmetic for most triangles."""
+    n0, n1, n2 = tri_normal[k, 0], tri_normal[k, 1], tri_normal[k, 2]
+    a0, a1, a2 = tri[k, 0, 0], tri[k, 0, 1], tri[k, 0, 2]
+    sx = n0 * (x[0] - a0) + n1 * (x[1] - a1) + n2 * (x[2] - a2)
+    so = n0 * (o[0] - a0) + n1 * (o[1] - a1) + n2 * (o[2] - a2)
+    return (sx > tol and so > tol) or (sx < -tol and so < -tol)
+
+
+@numba.njit(cache=True, inline="always")
 def _skip(tv, x_vertex, o_vertex):
     """Is the triangle with vertex numbers tv incident to O (or to X, when X is a vertex)?"""
     if tv[0] == o_vertex or tv[1] == o_vertex or tv[2] == o_vertex:
@@ -244,7 +261,7 @@ def _skip(tv, x_vertex, o_vertex):
 
 @numba.njit(cache=True)
 def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                         node_count, tri, tri_vertex, scale, hint):
+                         node_count, tri, tri_vertex, tri_normal, scale, hint):
     """(15) as segment_blocked, and the occluding triangle: returns (blocked, triangle or -1).
 
     hint: a triangle to test first (-1: none), e.g. the last occluder found from the same X:
@@ -259,6 +276,7 @@ def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left
     for k in range(3):
         inv[k] = 1.0 / d[k] if d[k] != 0.0 else np.inf
     pad = 1e-9 * scale
+    tol = 2.0 * EPS_PLANE * scale  # margin of the plane-side test (twice _seg_tri's coplanar band)
     stack = np.empty(64, dtype=np.int64)
     stack[0] = 0
     top = 1
@@ -272,6 +290,8 @@ def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left
             for k in range(s, s + node_count[nd]):
                 if k == hint or _skip(tri_vertex[k], x_vertex, o_vertex):
                     continue
+                if _same_side(x, o, tri, tri_normal, k, tol):
+                    continue
                 if _seg_tri(x, d, tri, k, scale):
                     return True, k
         else:
@@ -283,18 +303,18 @@ def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left
 
 @numba.njit(cache=True)
 def segment_blocked(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                    node_count, tri, tri_vertex, scale):
+                    node_count, tri, tri_vertex, tri_normal, scale):
     """(15) True when the open segment x -> o crosses a triangle incident to neither x_vertex nor o_vertex."""
     return segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                                node_count, tri, tri_vertex, scale, -1)[0]
+                                node_count, tri, tri_vertex, tri_normal, scale, -1)[0]
 
 
 @numba.njit(cache=True, parallel=True)
 def _blocked_many(x, o, xv, ov, node_min, node_max, node_left, node_right, node_start, node_count, tri,
-                  tri_vertex, scale, out):
+                  tri_vertex, tri_normal, scale, out):
     for i in numba.prange(len(x)):
         out[i] = segment_blocked(x[i], o[i], xv[i], ov[i], node_min, node_max, node_left, node_right,
-                                 node_start, node_count, tri, tri_vertex, scale)
+                                 node_start, node_count, tri, tri_vertex, tri_normal, scale)
 
 
 def blocked(bvh: Bvh, x: NDArray[np.float64], o: NDArray[np.float64], *, x_vertex: NDArray[np.int64] | None = None,
