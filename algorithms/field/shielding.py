@@ -261,23 +261,26 @@ def _skip(tv, x_vertex, o_vertex):
 
 @numba.njit(cache=True)
 def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                         node_count, tri, tri_vertex, tri_normal, scale, hint):
+                         node_count, tri, tri_vertex, tri_normal, scale, hint, stack, work):
     """(15) as segment_blocked, and the occluding triangle: returns (blocked, triangle or -1).
 
     hint: a triangle to test first (-1: none), e.g. the last occluder found from the same X:
     segments from one point to neighbouring sources are often blocked by the same triangle, and
-    the answer is the same either way (it only saves the traversal when the hint blocks)."""
+    the answer is the same either way (it only saves the traversal when the hint blocks).
+    stack (>= 64 int64) and work (2, 3) are scratch arrays the caller allocates once (an
+    allocation per segment costs more than the traversal under parallel threads)."""
     if len(node_min) == 0 or len(tri) == 0:
         return False, -1
-    d = o - x
+    d = work[0]
+    inv = work[1]
+    for k in range(3):
+        d[k] = o[k] - x[k]
     if hint >= 0 and not _skip(tri_vertex[hint], x_vertex, o_vertex) and _seg_tri(x, d, tri, hint, scale):
         return True, hint
-    inv = np.empty(3)
     for k in range(3):
         inv[k] = 1.0 / d[k] if d[k] != 0.0 else np.inf
     pad = 1e-9 * scale
     tol = 2.0 * EPS_PLANE * scale  # margin of the plane-side test (twice _seg_tri's coplanar band)
-    stack = np.empty(64, dtype=np.int64)
     stack[0] = 0
     top = 1
     while top > 0:
@@ -306,7 +309,8 @@ def segment_blocked(x, o, x_vertex, o_vertex, node_min, node_max, node_left, nod
                     node_count, tri, tri_vertex, tri_normal, scale):
     """(15) True when the open segment x -> o crosses a triangle incident to neither x_vertex nor o_vertex."""
     return segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                                node_count, tri, tri_vertex, tri_normal, scale, -1)[0]
+                                node_count, tri, tri_vertex, tri_normal, scale, -1, np.empty(64, dtype=np.int64),
+                                np.empty((2, 3)))[0]
 
 
 @numba.njit(cache=True, parallel=True)
