@@ -194,7 +194,7 @@ def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr, lim, hint, stack, work
         ratio = q2 / length
     if shield:
         hit, occ = segment_blocked_hint(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6],
-                                        bv[7], bv[8], bv[9], hint, stack, work)
+                                        bv[7], hint, stack, work)
         if hit:
             return False, 1.0, occ  # (15) delta_XO = 0
     return True, ratio, hint
@@ -219,7 +219,7 @@ def _narrow(x, oa, ob):
 @numba.njit(cache=True, fastmath=FAST)
 def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
                 scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
@@ -233,7 +233,7 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     """
     m = o.shape[0]
     xi = x[i]
-    bv = (node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal, scale)
+    bv = (node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal, scale)
     gr = (g_origin, g_cell, g_dims, g_lattice)
     best = 1e300
     bj = -1
@@ -346,14 +346,14 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
 @numba.njit(cache=True, parallel=True)
 def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
                 scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in numba.prange(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
                 scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
@@ -362,14 +362,14 @@ def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, s
 @numba.njit(cache=True)
 def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
                 scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in range(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, tri_normal,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
                 scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
@@ -593,9 +593,8 @@ class IndicatorField:
         return Evaluation(H.reshape(n, 3, 3), near, dist, pairs)
 
 
-_EMPTY_BVH = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
-              np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
-              np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3)))
+_EMPTY_BVH = (np.zeros((0, 6)), np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64),
+              np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3)))
 _EMPTY_GRID = (np.zeros(3), 1.0, np.ones(3, dtype=np.int64), np.zeros(1))
 
 

@@ -13,7 +13,7 @@ window (EPS_T, 1 - EPS_T) keeps the open segment open: touching at X or O does n
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
@@ -35,6 +35,8 @@ class Bvh:
     node_start, node_count: (K,) slice of the reordered triangles at leaves;
     tri: (F, 3, 3) reordered corner coordinates; tri_vertex: (F, 3) their vertex numbers;
     tri_normal: (F, 3) unit normals (zero for a degenerate triangle), for the quick plane-side test.
+    node_box (K, 6): min and max of each box, padded by 1e-9 x scale, side by side (one cache
+    line per box test); node_child (K, 2): left and right. These two are what the traversal reads.
     """
 
     node_min: NDArray[np.float64]
@@ -47,14 +49,23 @@ class Bvh:
     tri_vertex: NDArray[np.int64]
     tri_normal: NDArray[np.float64]
     scale: float  # bounding-box diagonal (for tolerances)
+    node_box: NDArray[np.float64] = field(init=False, repr=False)
+    node_child: NDArray[np.int64] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        pad = 1e-9 * self.scale  # so a segment touching a box face still enters it
+        box = np.hstack([self.node_min - pad, self.node_max + pad]).reshape(-1, 6)
+        object.__setattr__(self, "node_box", np.ascontiguousarray(box))
+        child = np.stack([self.node_left, self.node_right], 1).reshape(-1, 2)
+        object.__setattr__(self, "node_child", np.ascontiguousarray(child, dtype=np.int64))
 
     @property
     def n_triangles(self) -> int:
         return int(len(self.tri))
 
     def arrays(self) -> tuple:
-        return (self.node_min, self.node_max, self.node_left, self.node_right, self.node_start,
-                self.node_count, self.tri, self.tri_vertex, self.tri_normal)
+        return (self.node_box, self.node_child, self.node_start, self.node_count, self.tri, self.tri_vertex,
+                self.tri_normal)
 
 
 def _median_sort(order: NDArray[np.int64], cen: NDArray[np.float64], ss: NDArray[np.int64],
@@ -149,14 +160,14 @@ def mesh_bvh(mesh: Mesh) -> Bvh:
 
 
 @numba.njit(cache=True, inline="always")
-def _seg_box(x, inv, node_min, node_max, nd, pad):
-    """Does the segment X + t D, t in [0, 1], meet box nd padded by pad? (slab test; inv = 1 / D
-    per axis, precomputed once per segment: +-inf on an axis D is parallel to)"""
+def _seg_box(x, inv, node_box, nd):
+    """Does the segment X + t D, t in [0, 1], meet (padded) box nd? (slab test; inv = 1 / D per
+    axis, precomputed once per segment: inf on an axis D is parallel to)"""
     t0 = 0.0
     t1 = 1.0
     for k in range(3):
-        lo = node_min[nd, k] - pad
-        hi = node_max[nd, k] + pad
+        lo = node_box[nd, k]
+        hi = node_box[nd, k + 3]
         xk = x[k]
         ik = inv[k]
         if np.isinf(ik):  # parallel to this slab: inside it or not at all
@@ -165,15 +176,9 @@ def _seg_box(x, inv, node_min, node_max, nd, pad):
             continue
         ta = (lo - xk) * ik
         tb = (hi - xk) * ik
-        if ta > tb:
-            ta, tb = tb, ta
-        if ta > t0:
-            t0 = ta
-        if tb < t1:
-            t1 = tb
-        if t0 > t1:
-            return False
-    return True
+        t0 = max(t0, min(ta, tb))
+        t1 = min(t1, max(ta, tb))
+    return t0 <= t1
 
 
 @numba.njit(cache=True, inline="always")
@@ -260,8 +265,8 @@ def _skip(tv, x_vertex, o_vertex):
 
 
 @numba.njit(cache=True)
-def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                         node_count, tri, tri_vertex, tri_normal, scale, hint, stack, work):
+def segment_blocked_hint(x, o, x_vertex, o_vertex, node_box, node_child, node_start, node_count, tri, tri_vertex,
+                         tri_normal, scale, hint, stack, work):
     """(15) as segment_blocked, and the occluding triangle: returns (blocked, triangle or -1).
 
     hint: a triangle to test first (-1: none), e.g. the last occluder found from the same X:
@@ -269,7 +274,7 @@ def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left
     the answer is the same either way (it only saves the traversal when the hint blocks).
     stack (>= 64 int64) and work (2, 3) are scratch arrays the caller allocates once (an
     allocation per segment costs more than the traversal under parallel threads)."""
-    if len(node_min) == 0 or len(tri) == 0:
+    if len(node_box) == 0 or len(tri) == 0:
         return False, -1
     d = work[0]
     inv = work[1]
@@ -279,16 +284,15 @@ def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left
         return True, hint
     for k in range(3):
         inv[k] = 1.0 / d[k] if d[k] != 0.0 else np.inf
-    pad = 1e-9 * scale
     tol = 2.0 * EPS_PLANE * scale  # margin of the plane-side test (twice _seg_tri's coplanar band)
     stack[0] = 0
     top = 1
     while top > 0:
         top -= 1
         nd = stack[top]
-        if not _seg_box(x, inv, node_min, node_max, nd, pad):
+        if not _seg_box(x, inv, node_box, nd):
             continue
-        if node_left[nd] < 0:
+        if node_child[nd, 0] < 0:
             s = node_start[nd]
             for k in range(s, s + node_count[nd]):
                 if k == hint or _skip(tri_vertex[k], x_vertex, o_vertex):
@@ -298,27 +302,27 @@ def segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left
                 if _seg_tri(x, d, tri, k, scale):
                     return True, k
         else:
-            stack[top] = node_left[nd]
-            stack[top + 1] = node_right[nd]
+            stack[top] = node_child[nd, 0]
+            stack[top + 1] = node_child[nd, 1]
             top += 2
     return False, -1
 
 
 @numba.njit(cache=True)
-def segment_blocked(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                    node_count, tri, tri_vertex, tri_normal, scale):
+def segment_blocked(x, o, x_vertex, o_vertex, node_box, node_child, node_start, node_count, tri, tri_vertex,
+                    tri_normal, scale):
     """(15) True when the open segment x -> o crosses a triangle incident to neither x_vertex nor o_vertex."""
-    return segment_blocked_hint(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                                node_count, tri, tri_vertex, tri_normal, scale, -1, np.empty(64, dtype=np.int64),
+    return segment_blocked_hint(x, o, x_vertex, o_vertex, node_box, node_child, node_start, node_count, tri,
+                                tri_vertex, tri_normal, scale, -1, np.empty(64, dtype=np.int64),
                                 np.empty((2, 3)))[0]
 
 
 @numba.njit(cache=True, parallel=True)
-def _blocked_many(x, o, xv, ov, node_min, node_max, node_left, node_right, node_start, node_count, tri,
-                  tri_vertex, tri_normal, scale, out):
+def _blocked_many(x, o, xv, ov, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal, scale,
+                  out):
     for i in numba.prange(len(x)):
-        out[i] = segment_blocked(x[i], o[i], xv[i], ov[i], node_min, node_max, node_left, node_right,
-                                 node_start, node_count, tri, tri_vertex, tri_normal, scale)
+        out[i] = segment_blocked(x[i], o[i], xv[i], ov[i], node_box, node_child, node_start, node_count, tri,
+                                 tri_vertex, tri_normal, scale)
 
 
 def blocked(bvh: Bvh, x: NDArray[np.float64], o: NDArray[np.float64], *, x_vertex: NDArray[np.int64] | None = None,
