@@ -138,10 +138,12 @@ samples, trilinear) and comes first: a pair whose q2 is still beyond the pruning
 without a segment test (the q2 sum stops as soon as that is certain). The segment test walks the
 BVH (slab tests with a precomputed 1/D, the last occluder from the same point tried first, a
 plane-side test with stored unit normals before the exact segment-triangle test, no allocation
-per segment). What is left is mostly the BVH walk itself: a segment between two boundary points
-follows two root-to-leaf paths (about 70 box tests, 5 leaves, measured), about 1.3 us per
-segment per core, and the benchmark's case needs about 430,000 anchors (q2) of which about
-200,000 reach the segment test.
+per segment, padded boxes side by side). What is left is mostly the BVH walk itself: a segment
+between two boundary points follows two root-to-leaf paths (about 70 box tests, 5 leaves,
+measured), about 1 us per segment per core, and this case needs about 430,000 anchors (q2, about
+0.3 us each) of which about 200,000 reach the segment test. Larger strides do not help here:
+near the pruning limit the q2 of neighbouring anchors falls on both sides of it (the free points
+are random), and every such disagreement re-tests the sources in between.
 
 Force lines from {N_LINES} evenly spaced boundary points of island 0 (each step evaluates the field
 of {N_LON} sources at one point, single-threaded; the time includes each line's set-up):
