@@ -27,12 +27,16 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from .field.protocol import MissingSurfaceField
+from .field import light_tracer as lt
+from .field.protocol import Biaf, MissingSurfaceField
 from .params import FieldParams
 from .records import ARRIVED, STALLED, STEP_LIMIT, TOO_WEAK, TURNED_BACK, Cancelled, ForceLine
 
 Arr = NDArray[np.float64]
 PC_SAMPLES = 5  # predictor-corrector: points tried on [P1' - d N1', P1' + d N1'] (the centre included)
+FUSED_CHUNK = 256  # steps per call of the fused light-mode tracer (cancel is checked between calls)
+_STATUS = {lt.ARRIVED_C: ARRIVED, lt.TURNED_BACK_C: TURNED_BACK, lt.TOO_WEAK_C: TOO_WEAK, lt.STALLED_C: STALLED,
+           lt.STEP_LIMIT_C: STEP_LIMIT}
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,6 +108,9 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
     if s0.force is None or t0 <= 0 or s0.normal is None:
         return done(TOO_WEAK)
     f, n = s0.force, s0.normal
+    if params.tracer == "simple" and isinstance(field, Biaf) and not field.field.full and len(field.field.sources):
+        rec = (pts, nrm, frc, ten)
+        return _trace_fused(field, x, f, n, params, targets, step, avoid_tree, floor, cancel, rec, done)
     dev = params.deviation * step
     offs = np.linspace(-1.0, 1.0, PC_SAMPLES)
     simple = params.tracer == "simple"
@@ -152,3 +159,33 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
         if float(sf @ tang) < 0:
             return done(STALLED)
         f, n = sf, s.normal
+
+
+def _trace_fused(field: Biaf, x: Arr, f: Arr, n: Arr, params: FieldParams, targets: Targets, step: float,
+                 avoid_tree: cKDTree | None, floor: float, cancel: Callable[[], bool] | None, rec: tuple,
+                 done: Callable[[str, int], ForceLine]) -> ForceLine:
+    """The simple tracer's loop in numba (field/light_tracer.py) for the light-mode BIAF: the same
+    steps as trace's Python loop, FUSED_CHUNK steps per call."""
+    F = field.field
+    S = F.sources
+    pts, nrm, frc, ten = rec
+    state = np.array([x, f, n], dtype=np.float64)
+    start = np.array(pts[0], dtype=np.float64)
+    avoid = np.ascontiguousarray(avoid_tree.data, dtype=np.float64) if avoid_tree is not None else np.zeros((0, 3))
+    tg = np.ascontiguousarray(targets.points, dtype=np.float64)
+    reach = np.ascontiguousarray(targets.reach, dtype=np.float64)
+    chunk = min(FUSED_CHUNK, params.max_steps)
+    ox, on, of = np.empty((chunk, 3)), np.empty((chunk, 3)), np.empty((chunk, 3))
+    ot = np.empty(chunk)
+    while True:  # sequential: each chunk continues the line where the last one stopped
+        if cancel is not None and cancel():
+            raise Cancelled()
+        k, code, hit = lt.simple_chunk(state, start, len(pts), params.max_steps, chunk, float(step), float(floor),
+                                       S.points, S.tangent, S.outward, S.charge, F.lc * F.lc, float(F.params.ki),
+                                       F.kernel, F._prune2, tg, reach, avoid, ox, on, of, ot)
+        pts.extend(ox[:k].copy())
+        nrm.extend(on[:k].copy())
+        frc.extend(of[:k].copy())
+        ten.extend(ot[:k].tolist())
+        if code != lt.CONTINUE:
+            return done(_STATUS[code], int(hit))

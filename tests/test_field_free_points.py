@@ -67,3 +67,22 @@ def test_free_points_raise_the_bridge_quality_in_full_mode():
     qa = max(c.quality for c in plain.arrived())
     qb = max(c.quality for c in with_fp.arrived())
     assert qb > qa
+
+
+def test_capped_q2_is_exact_below_the_cap_and_certain_above_it():
+    """The field kernel's q2 stops once the partial sum passes the pruning cap (4)."""
+    from algorithms.field.free_points import lattice_args, q2_lattice, q2_lattice_capped
+
+    rng = np.random.default_rng(5)
+    fp = free_points(rng.uniform(-1, 1, size=(200, 3)), kt=0.6, rc=0.2)
+    la = lattice_args(fp)
+    for _ in range(40):
+        x, o = rng.uniform(-1, 1, 3), rng.uniform(-1, 1, 3)
+        L = float(np.linalg.norm(o - x))
+        q = q2_lattice(x, o, L, *la)
+        for cap in (0.3 * q, 0.9 * q, 1.1 * q, 1e300):
+            c = q2_lattice_capped(x, o, L, *la, cap)
+            if cap >= q:
+                assert c == pytest.approx(q, rel=1e-12)
+            else:
+                assert cap < c <= q * (1 + 1e-12)

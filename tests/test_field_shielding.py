@@ -128,3 +128,22 @@ def test_visibility_coherence_agrees_with_exact_shielding():
 def test_shield_stride_is_validated():
     with pytest.raises(ValueError, match="parameter shield_stride="):
         FieldParams(shield_stride=0)
+
+
+def test_occluder_hint_changes_no_answer():
+    """(15) with the last occluder tried first: the same answers as without a hint, whatever the hint."""
+    from algorithms.field.shielding import segment_blocked_hint
+
+    m = icosphere(2)
+    b = mesh_bvh(m)
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(200, 3)) * 1.5
+    o = rng.normal(size=(200, 3)) * 1.5
+    ref = brute_blocked(m.vertices, m.faces, x, o)
+    stack, work = np.empty(64, dtype=np.int64), np.empty((2, 3))
+    hint = -1
+    for i in range(len(x)):
+        for h in (hint, int(rng.integers(b.n_triangles)), -1):
+            hit, occ = segment_blocked_hint(x[i], o[i], -1, -1, *b.arrays(), b.scale, h, stack, work)
+            assert hit == ref[i] and (occ >= 0) == hit
+        hint = occ if hit else hint

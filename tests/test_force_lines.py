@@ -166,3 +166,48 @@ def test_trace_in_loop_without_a_model_and_with_a_tiny_window():
     ln = trace_in_loop(None, hole, 0, FieldParams(step=0.05))
     assert ln.arrived
     np.testing.assert_allclose(m.mesh.vertices[ln.end_vertex], -hole.points[0], atol=1e-9)
+
+
+class _PythonLoop:
+    """The same field behind a plain protocol object: trace then runs its Python loop."""
+
+    def __init__(self, field):
+        self.f, self.provides = field, field.provides
+
+    def sample(self, *a):
+        return self.f.sample(*a)
+
+    def potential(self, *a):
+        return self.f.potential(*a)
+
+    def attraction(self, *a):
+        return self.f.attraction(*a)
+
+
+@pytest.mark.parametrize("kernel,lc,max_steps", [("gauss", 0.6, 2000), ("cauchy", 1.0, 2000), ("gauss", 0.6, 7)])
+def test_fused_light_tracer_is_the_python_loop(disks, kernel, lc, max_steps):
+    """The numba simple tracer (field/light_tracer.py) records the same line, status and end
+    as trace's Python loop: arrivals, stalls and the step limit."""
+    from algorithms.bridges import _trace_unit, _unit_tools
+    from algorithms.records import STEP_LIMIT
+
+    p = FieldParams(mode="light", q1_kernel=kernel, lc=lc, step=0.05, max_steps=max_steps)
+    ctx = field_context(disks, p)
+    li = [k for k, fr in enumerate(ctx.frames) if fr.island == 0][0]
+    field, tg, avoid = _unit_tools(ctx, int(ctx.unit[li]), ctx.params)
+    fr = ctx.frames[li]
+    statuses = set()
+    for k in (0, 4, 7, 10):
+        args = (fr.points[k], fr.tangent[k], fr.normal[k], ctx.params, tg)
+        a = trace(field, *args, step=ctx.step, avoid=avoid)
+        b = trace(_PythonLoop(field), *args, step=ctx.step, avoid=avoid)
+        assert (a.status, a.end_vertex, len(a.points)) == (b.status, b.end_vertex, len(b.points))
+        for u, v in ((a.points, b.points), (a.normals, b.normals), (a.forces, b.forces), (a.tensions, b.tensions)):
+            np.testing.assert_allclose(u, v, rtol=1e-9, atol=1e-12)
+        statuses.add(a.status)
+        assert _trace_unit(ctx, li, k, ctx.params, (field, tg, avoid)).status == a.status
+    assert statuses == {ARRIVED} if max_steps > 7 and kernel == "gauss" else statuses <= {ARRIVED, STALLED, STEP_LIMIT}
+    if max_steps == 7:
+        assert statuses == {STEP_LIMIT}
+    if kernel == "cauchy":
+        assert STALLED in statuses

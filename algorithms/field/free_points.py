@@ -118,12 +118,9 @@ def _fill_lattice(p, origin, h, dims, lat, g0v, rc2, cut2, kernel):
                         lat[(a * dims[1] + b) * dims[2] + c] += g
 
 
-@numba.njit(cache=True, fastmath=True)
-def lattice_g(y, origin, h, dims, lat):
-    """sum G at y by trilinear interpolation of the lattice (0 outside it)."""
-    f0 = (y[0] - origin[0]) / h
-    f1 = (y[1] - origin[1]) / h
-    f2 = (y[2] - origin[2]) / h
+@numba.njit(cache=True, fastmath=True, inline="always")
+def _lattice_at(f0, f1, f2, dims, lat):
+    """sum G by trilinear interpolation at lattice coordinates (f0, f1, f2) (0 outside the lattice)."""
     if f0 < 0 or f1 < 0 or f2 < 0 or f0 >= dims[0] - 1 or f1 >= dims[1] - 1 or f2 >= dims[2] - 1:
         return 0.0
     a, b, c = int(f0), int(f1), int(f2)
@@ -138,15 +135,34 @@ def lattice_g(y, origin, h, dims, lat):
 
 
 @numba.njit(cache=True, fastmath=True)
+def lattice_g(y, origin, h, dims, lat):
+    """sum G at y by trilinear interpolation of the lattice (0 outside it)."""
+    return _lattice_at((y[0] - origin[0]) / h, (y[1] - origin[1]) / h, (y[2] - origin[2]) / h, dims, lat)
+
+
+@numba.njit(cache=True, fastmath=True)
 def q2_lattice(x, o, length, origin, h, dims, lat):
-    """(4) q2 of the segment x -> o: midpoint rule with LATTICE_SAMPLES samples of the lattice."""
+    """(4) q2 of the segment x -> o: midpoint rule with LATTICE_SAMPLES samples of the lattice.
+    The samples are stepped in lattice coordinates (no division or temporary array per sample)."""
+    return q2_lattice_capped(x, o, length, origin, h, dims, lat, 1e300)
+
+
+@numba.njit(cache=True, fastmath=True)
+def q2_lattice_capped(x, o, length, origin, h, dims, lat, cap):
+    """q2_lattice, but it may stop as soon as the partial sum already exceeds cap (every term of
+    the midpoint rule is positive, so q2 > cap is then certain): the pruning test of the field
+    kernel needs no more. Below cap the value is exactly q2_lattice's. cap must be finite
+    (fastmath assumes no infinities)."""
+    ih = 1.0 / h
+    a0, a1, a2 = (x[0] - origin[0]) * ih, (x[1] - origin[1]) * ih, (x[2] - origin[2]) * ih
+    g0_, g1, g2 = (o[0] - x[0]) * ih, (o[1] - x[1]) * ih, (o[2] - x[2]) * ih
     acc = 0.0
-    y = np.empty(3)
+    cap_n = cap * LATTICE_SAMPLES
     for s in range(LATTICE_SAMPLES):
         t = (s + 0.5) / LATTICE_SAMPLES
-        for k in range(3):
-            y[k] = x[k] + t * (o[k] - x[k])
-        acc += 1.0 / (1.0 + lattice_g(y, origin, h, dims, lat))
+        acc += 1.0 / (1.0 + _lattice_at(a0 + t * g0_, a1 + t * g1, a2 + t * g2, dims, lat))
+        if acc * length > cap_n:
+            break
     return length * acc / LATTICE_SAMPLES
 
 

@@ -27,9 +27,9 @@ from numpy.typing import NDArray
 
 from ..boundary import LoopFrame
 from ..params import FieldParams
-from .free_points import FreePoints, lattice_args, q2_lattice
+from .free_points import FreePoints, lattice_args, q2_lattice_capped
 from .quality import g0
-from .shielding import Bvh, segment_blocked
+from .shielding import Bvh, segment_blocked_hint
 
 Arr = NDArray[np.float64]
 PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: relative weight below which a Gaussian source is skipped
@@ -174,22 +174,34 @@ def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, s
 
 
 @numba.njit(cache=True)
-def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr):
-    """(visible, q2 / L) of the pair X -> source j: shielding (15) and free points (4).
-    bv: the BVH arrays and scale; gr: the free-point lattice arguments of q2_lattice."""
-    if shield and segment_blocked(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6], bv[7],
-                                  bv[8]):
-        return False, 1.0  # (15) delta_XO = 0
-    if not use_fp:
-        return True, 1.0
-    r0 = o[j, 0] - xi[0]
-    r1 = o[j, 1] - xi[1]
-    r2 = o[j, 2] - xi[2]
-    length = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
-    q2 = q2_lattice(xi, o[j], length, gr[0], gr[1], gr[2], gr[3])  # (4)
-    return True, q2 / length
+def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr, lim, hint, stack, work):
+    """(visible, q2 / L, occluder) of the pair X -> source j: free points (4), then shielding (15).
+
+    q2 comes first: a pair whose effective length is still beyond the pruning limit (q2^2 > lim,
+    its weight below exp(-16) of the nearest source's, the rule of the candidate pass) is dropped
+    without the costly segment test. hint: the last occluder found from X (tested first; the
+    returned occluder is the new hint). bv: the BVH arrays and scale; gr: the free-point lattice
+    arguments of q2_lattice; stack, work: the traversal's scratch arrays."""
+    ratio = 1.0
+    if use_fp:
+        r0 = o[j, 0] - xi[0]
+        r1 = o[j, 1] - xi[1]
+        r2 = o[j, 2] - xi[2]
+        length = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+        q2 = q2_lattice_capped(xi, o[j], length, gr[0], gr[1], gr[2], gr[3], np.sqrt(lim))  # (4)
+        if q2 * q2 > lim:
+            return False, 1.0, hint  # negligible weight: pruned like the candidate pass does
+        ratio = q2 / length
+    if shield:
+        hit, occ = segment_blocked_hint(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6],
+                                        bv[7], hint, stack, work)
+        if hit:
+            return False, 1.0, occ  # (15) delta_XO = 0
+    return True, ratio, hint
 
 
+# reassociation etc. for the sums, but no "no-inf / no-nan" assumptions (inf marks "no source")
+FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
 COS_COHERENT = np.cos(np.radians(10.0))  # anchors closer than this angle seen from X may be interpolated
 
 
@@ -204,10 +216,11 @@ def _narrow(x, oa, ob):
     return dot > 0 and dot * dot > COS_COHERENT * COS_COHERENT * na * nb
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath=FAST)
 def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8).
@@ -220,7 +233,7 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     """
     m = o.shape[0]
     xi = x[i]
-    bv = (node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale)
+    bv = (node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal, scale)
     gr = (g_origin, g_cell, g_dims, g_lattice)
     best = 1e300
     bj = -1
@@ -261,18 +274,22 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         nc += 1
     vis = np.ones(nc, dtype=np.bool_)
     ratio = np.ones(nc)
+    lim = best + prune2  # q2^2 beyond this: weight below exp(-16) of the nearest source's
+    occ = -1  # the last occluding triangle (tested first for the next segment from X)
+    stack = np.empty(64, dtype=np.int64)  # BVH traversal scratch, once per point
+    work = np.empty((2, 3))
     k = 0
     while k < nc:  # runs of consecutive sources of one loop
         e = k + 1
         while e < nc and cand[e] == cand[e - 1] + 1 and sloop[cand[e]] == sloop[cand[k]]:
             e += 1
         a = k
-        va, ra = _pair_eval(xi, xv[i], cand[a], o, ov, shield, bv, use_fp, gr)
+        va, ra, occ = _pair_eval(xi, xv[i], cand[a], o, ov, shield, bv, use_fp, gr, lim, occ, stack, work)
         vis[a] = va
         ratio[a] = ra
         while a < e - 1:
             bb = min(a + stride, e - 1)
-            vb, rb = _pair_eval(xi, xv[i], cand[bb], o, ov, shield, bv, use_fp, gr)
+            vb, rb, occ = _pair_eval(xi, xv[i], cand[bb], o, ov, shield, bv, use_fp, gr, lim, occ, stack, work)
             vis[bb] = vb
             ratio[bb] = rb
             if vb == va and _narrow(xi, o[cand[a]], o[cand[bb]]):
@@ -281,14 +298,14 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
                     ratio[t] = ra + (rb - ra) * (t - a) / (bb - a)
             else:
                 for t in range(a + 1, bb):
-                    vt, rt = _pair_eval(xi, xv[i], cand[t], o, ov, shield, bv, use_fp, gr)
+                    vt, rt, occ = _pair_eval(xi, xv[i], cand[t], o, ov, shield, bv, use_fp, gr, lim, occ, stack, work)
                     vis[t] = vt
                     ratio[t] = rt
             a = bb
             va = vb
             ra = rb
         k = e
-    acc = np.zeros(9)
+    h00 = h01 = h02 = h10 = h11 = h12 = h20 = h21 = h22 = 0.0  # scalars: kept in registers
     for c in range(nc):
         if not vis[c]:
             continue  # (15) delta_XO = 0
@@ -298,7 +315,8 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         r2 = o[j, 2] - x[i, 2]
         l2 = r0 * r0 + r1 * r1 + r2 * r2
         length = np.sqrt(l2)
-        d0, d1, d2 = r0 / length, r1 / length, r2 / length  # (6)
+        il = 1.0 / length
+        d0, d1, d2 = r0 * il, r1 * il, r2 * il  # (6)
         t0, t1, t2 = tau[j, 0], tau[j, 1], tau[j, 2]
         s0 = t1 * d2 - t2 * d1  # s_O = tau_O x d
         s1 = t2 * d0 - t0 * d2
@@ -307,17 +325,19 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         q2 = ratio[c] * length  # (4); = L without free points
         q12 = _q1(q2 * q2, lc2, kernel)  # (8)
         w = h[j] * q12 * (1.0 + ki * q4)  # (13)
-        acc[0] += w * d0 * s0  # (12)-(14): h g d s^T
-        acc[1] += w * d0 * s1
-        acc[2] += w * d0 * s2
-        acc[3] += w * d1 * s0
-        acc[4] += w * d1 * s1
-        acc[5] += w * d1 * s2
-        acc[6] += w * d2 * s0
-        acc[7] += w * d2 * s1
-        acc[8] += w * d2 * s2
-    for k2 in range(9):
-        out_h[i, k2] = acc[k2]
+        wd0, wd1, wd2 = w * d0, w * d1, w * d2  # (12)-(14): h g d s^T
+        h00 += wd0 * s0
+        h01 += wd0 * s1
+        h02 += wd0 * s2
+        h10 += wd1 * s0
+        h11 += wd1 * s1
+        h12 += wd1 * s2
+        h20 += wd2 * s0
+        h21 += wd2 * s1
+        h22 += wd2 * s2
+    out_h[i, 0], out_h[i, 1], out_h[i, 2] = h00, h01, h02
+    out_h[i, 3], out_h[i, 4], out_h[i, 5] = h10, h11, h12
+    out_h[i, 6], out_h[i, 7], out_h[i, 8] = h20, h21, h22
     out_near[i] = bj
     out_dist[i] = np.sqrt(best) if bj >= 0 else np.inf
     out_pairs[i] = nc
@@ -326,13 +346,15 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
 @numba.njit(cache=True, parallel=True)
 def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in numba.prange(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
 
@@ -340,13 +362,15 @@ def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, s
 @numba.njit(cache=True)
 def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs):
     for i in range(x.shape[0]):
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_min, node_max, node_left, node_right, node_start, node_count, tri, tri_vertex, scale,
+                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
+                scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
                 out_h, out_near, out_dist, out_pairs)
 
@@ -569,9 +593,8 @@ class IndicatorField:
         return Evaluation(H.reshape(n, 3, 3), near, dist, pairs)
 
 
-_EMPTY_BVH = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
-              np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)),
-              np.zeros((0, 3), dtype=np.int64))
+_EMPTY_BVH = (np.zeros((0, 6)), np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64),
+              np.zeros(0, dtype=np.int64), np.zeros((0, 3, 3)), np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3)))
 _EMPTY_GRID = (np.zeros(3), 1.0, np.ones(3, dtype=np.int64), np.zeros(1))
 
 

@@ -13,7 +13,7 @@ window (EPS_T, 1 - EPS_T) keeps the open segment open: touching at X or O does n
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
@@ -33,7 +33,10 @@ class Bvh:
 
     node_min, node_max: (K, 3); node_left, node_right: (K,) child nodes (-1 at leaves);
     node_start, node_count: (K,) slice of the reordered triangles at leaves;
-    tri: (F, 3, 3) reordered corner coordinates; tri_vertex: (F, 3) their vertex numbers.
+    tri: (F, 3, 3) reordered corner coordinates; tri_vertex: (F, 3) their vertex numbers;
+    tri_normal: (F, 3) unit normals (zero for a degenerate triangle), for the quick plane-side test.
+    node_box (K, 6): min and max of each box, padded by 1e-9 x scale, side by side (one cache
+    line per box test); node_child (K, 2): left and right. These two are what the traversal reads.
     """
 
     node_min: NDArray[np.float64]
@@ -44,15 +47,25 @@ class Bvh:
     node_count: NDArray[np.int64]
     tri: NDArray[np.float64]
     tri_vertex: NDArray[np.int64]
+    tri_normal: NDArray[np.float64]
     scale: float  # bounding-box diagonal (for tolerances)
+    node_box: NDArray[np.float64] = field(init=False, repr=False)
+    node_child: NDArray[np.int64] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        pad = 1e-9 * self.scale  # so a segment touching a box face still enters it
+        box = np.hstack([self.node_min - pad, self.node_max + pad]).reshape(-1, 6)
+        object.__setattr__(self, "node_box", np.ascontiguousarray(box))
+        child = np.stack([self.node_left, self.node_right], 1).reshape(-1, 2)
+        object.__setattr__(self, "node_child", np.ascontiguousarray(child, dtype=np.int64))
 
     @property
     def n_triangles(self) -> int:
         return int(len(self.tri))
 
     def arrays(self) -> tuple:
-        return (self.node_min, self.node_max, self.node_left, self.node_right, self.node_start,
-                self.node_count, self.tri, self.tri_vertex)
+        return (self.node_box, self.node_child, self.node_start, self.node_count, self.tri, self.tri_vertex,
+                self.tri_normal)
 
 
 def _median_sort(order: NDArray[np.int64], cen: NDArray[np.float64], ss: NDArray[np.int64],
@@ -87,7 +100,7 @@ def build_bvh(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Bvh:
     if nf == 0:
         z = np.zeros(0, dtype=np.int64)
         return Bvh(np.zeros((0, 3)), np.zeros((0, 3)), z, z, z, z, np.zeros((0, 3, 3)),
-                   np.zeros((0, 3), dtype=np.int64), max(scale, 1e-300))
+                   np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3)), max(scale, 1e-300))
     tri = v[f]
     cen = tri.mean(axis=1)
     order = np.arange(nf)
@@ -135,40 +148,37 @@ def build_bvh(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Bvh:
         nmax[pa] = -np.inf
         np.minimum.at(nmin, pa, nmin[ids])
         np.maximum.at(nmax, pa, nmax[ids])
+    nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    nl = np.linalg.norm(nrm, axis=1, keepdims=True)
+    nrm = np.divide(nrm, nl, out=np.zeros_like(nrm), where=nl > 0)
     return Bvh(nmin, nmax, left, right, start.astype(np.int64), count.astype(np.int64),
-               np.ascontiguousarray(tri), np.ascontiguousarray(f), max(scale, 1e-300))
+               np.ascontiguousarray(tri), np.ascontiguousarray(f), np.ascontiguousarray(nrm), max(scale, 1e-300))
 
 
 def mesh_bvh(mesh: Mesh) -> Bvh:
     return build_bvh(mesh.vertices, mesh.faces)
 
 
-@numba.njit(cache=True)
-def _seg_box(x, d, node_min, node_max, nd, pad):
-    """Does the segment X + t D, t in [0, 1], meet box nd padded by pad? (slab test)"""
+@numba.njit(cache=True, inline="always")
+def _seg_box(x, inv, node_box, nd):
+    """Does the segment X + t D, t in [0, 1], meet (padded) box nd? (slab test; inv = 1 / D per
+    axis, precomputed once per segment: inf on an axis D is parallel to)"""
     t0 = 0.0
     t1 = 1.0
     for k in range(3):
-        lo = node_min[nd, k] - pad
-        hi = node_max[nd, k] + pad
+        lo = node_box[nd, k]
+        hi = node_box[nd, k + 3]
         xk = x[k]
-        dk = d[k]
-        if abs(dk) < 1e-300:
+        ik = inv[k]
+        if np.isinf(ik):  # parallel to this slab: inside it or not at all
             if xk < lo or xk > hi:
                 return False
-        else:
-            inv = 1.0 / dk
-            ta = (lo - xk) * inv
-            tb = (hi - xk) * inv
-            if ta > tb:
-                ta, tb = tb, ta
-            if ta > t0:
-                t0 = ta
-            if tb < t1:
-                t1 = tb
-            if t0 > t1:
-                return False
-    return True
+            continue
+        ta = (lo - xk) * ik
+        tb = (hi - xk) * ik
+        t0 = max(t0, min(ta, tb))
+        t1 = min(t1, max(ta, tb))
+    return t0 <= t1
 
 
 @numba.njit(cache=True, inline="always")
@@ -234,45 +244,85 @@ def _seg_tri(x, d, tri, k, scale):
     return True
 
 
+@numba.njit(cache=True, inline="always")
+def _same_side(x, o, tri, tri_normal, k, tol):
+    """Quick rejection before _seg_tri: X and O strictly on one side of triangle k's plane (beyond
+    tol, so a segment in the plane still gets the coplanar test): the segment cannot cross it.
+    Never changes _seg_tri's answer; it only spares its arithmetic for most triangles."""
+    n0, n1, n2 = tri_normal[k, 0], tri_normal[k, 1], tri_normal[k, 2]
+    a0, a1, a2 = tri[k, 0, 0], tri[k, 0, 1], tri[k, 0, 2]
+    sx = n0 * (x[0] - a0) + n1 * (x[1] - a1) + n2 * (x[2] - a2)
+    so = n0 * (o[0] - a0) + n1 * (o[1] - a1) + n2 * (o[2] - a2)
+    return (sx > tol and so > tol) or (sx < -tol and so < -tol)
+
+
+@numba.njit(cache=True, inline="always")
+def _skip(tv, x_vertex, o_vertex):
+    """Is the triangle with vertex numbers tv incident to O (or to X, when X is a vertex)?"""
+    if tv[0] == o_vertex or tv[1] == o_vertex or tv[2] == o_vertex:
+        return True
+    return x_vertex >= 0 and (tv[0] == x_vertex or tv[1] == x_vertex or tv[2] == x_vertex)
+
+
 @numba.njit(cache=True)
-def segment_blocked(x, o, x_vertex, o_vertex, node_min, node_max, node_left, node_right, node_start,
-                    node_count, tri, tri_vertex, scale):
-    """(15) True when the open segment x -> o crosses a triangle incident to neither x_vertex nor o_vertex."""
-    if len(node_min) == 0 or len(tri) == 0:
-        return False
-    d = o - x
-    pad = 1e-9 * scale
-    stack = np.empty(64, dtype=np.int64)
+def segment_blocked_hint(x, o, x_vertex, o_vertex, node_box, node_child, node_start, node_count, tri, tri_vertex,
+                         tri_normal, scale, hint, stack, work):
+    """(15) as segment_blocked, and the occluding triangle: returns (blocked, triangle or -1).
+
+    hint: a triangle to test first (-1: none), e.g. the last occluder found from the same X:
+    segments from one point to neighbouring sources are often blocked by the same triangle, and
+    the answer is the same either way (it only saves the traversal when the hint blocks).
+    stack (>= 64 int64) and work (2, 3) are scratch arrays the caller allocates once (an
+    allocation per segment costs more than the traversal under parallel threads)."""
+    if len(node_box) == 0 or len(tri) == 0:
+        return False, -1
+    d = work[0]
+    inv = work[1]
+    for k in range(3):
+        d[k] = o[k] - x[k]
+    if hint >= 0 and not _skip(tri_vertex[hint], x_vertex, o_vertex) and _seg_tri(x, d, tri, hint, scale):
+        return True, hint
+    for k in range(3):
+        inv[k] = 1.0 / d[k] if d[k] != 0.0 else np.inf
+    tol = 2.0 * EPS_PLANE * scale  # margin of the plane-side test (twice _seg_tri's coplanar band)
     stack[0] = 0
     top = 1
     while top > 0:
         top -= 1
         nd = stack[top]
-        if not _seg_box(x, d, node_min, node_max, nd, pad):
+        if not _seg_box(x, inv, node_box, nd):
             continue
-        if node_left[nd] < 0:
+        if node_child[nd, 0] < 0:
             s = node_start[nd]
             for k in range(s, s + node_count[nd]):
-                tv = tri_vertex[k]
-                if tv[0] == o_vertex or tv[1] == o_vertex or tv[2] == o_vertex:
+                if k == hint or _skip(tri_vertex[k], x_vertex, o_vertex):
                     continue
-                if x_vertex >= 0 and (tv[0] == x_vertex or tv[1] == x_vertex or tv[2] == x_vertex):
+                if _same_side(x, o, tri, tri_normal, k, tol):
                     continue
                 if _seg_tri(x, d, tri, k, scale):
-                    return True
+                    return True, k
         else:
-            stack[top] = node_left[nd]
-            stack[top + 1] = node_right[nd]
+            stack[top] = node_child[nd, 0]
+            stack[top + 1] = node_child[nd, 1]
             top += 2
-    return False
+    return False, -1
+
+
+@numba.njit(cache=True)
+def segment_blocked(x, o, x_vertex, o_vertex, node_box, node_child, node_start, node_count, tri, tri_vertex,
+                    tri_normal, scale):
+    """(15) True when the open segment x -> o crosses a triangle incident to neither x_vertex nor o_vertex."""
+    return segment_blocked_hint(x, o, x_vertex, o_vertex, node_box, node_child, node_start, node_count, tri,
+                                tri_vertex, tri_normal, scale, -1, np.empty(64, dtype=np.int64),
+                                np.empty((2, 3)))[0]
 
 
 @numba.njit(cache=True, parallel=True)
-def _blocked_many(x, o, xv, ov, node_min, node_max, node_left, node_right, node_start, node_count, tri,
-                  tri_vertex, scale, out):
+def _blocked_many(x, o, xv, ov, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal, scale,
+                  out):
     for i in numba.prange(len(x)):
-        out[i] = segment_blocked(x[i], o[i], xv[i], ov[i], node_min, node_max, node_left, node_right,
-                                 node_start, node_count, tri, tri_vertex, scale)
+        out[i] = segment_blocked(x[i], o[i], xv[i], ov[i], node_box, node_child, node_start, node_count, tri,
+                                 tri_vertex, tri_normal, scale)
 
 
 def blocked(bvh: Bvh, x: NDArray[np.float64], o: NDArray[np.float64], *, x_vertex: NDArray[np.int64] | None = None,

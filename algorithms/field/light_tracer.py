@@ -1,0 +1,107 @@
+"""The simple tracer (spec/repair.md §5, 2004) fused into one numba loop for the light-mode BIAF.
+
+force_lines.trace runs the same steps in Python against any field of the protocol; with a
+light-mode IndicatorField each step there costs ~150 us of Python (sample -> evaluate -> normal
+-> a k-d tree query for the targets and one for the avoid points) around ~20 us of arithmetic.
+Here a chunk of steps runs without leaving numba: H at the new point (12)-(14), its normal (16b),
+the target hit test (the 4 nearest targets, the nearest within its reach: force_lines.Targets.hit)
+and the turned-back test (nearest avoid point within one step) by brute force over the points,
+O(T) per step like the field itself (O(M) per step). The arithmetic is the Python tracer's, in
+the same order, so a line is the same line (tests/test_force_lines.py compares both).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from .indicator import _sample_light
+
+CONTINUE, ARRIVED_C, TURNED_BACK_C, TOO_WEAK_C, STALLED_C, STEP_LIMIT_C = 0, 1, 2, 3, 4, 5
+
+
+@numba.njit(cache=True)
+def target_hit(x, tg, reach):
+    """Index of the nearest target within its reach of x among the 4 nearest targets, or -1
+    (force_lines.Targets.hit by brute force)."""
+    kk = min(4, tg.shape[0])
+    bd = np.full(4, np.inf)
+    bi = np.full(4, -1, dtype=np.int64)
+    for j in range(tg.shape[0]):
+        r0 = tg[j, 0] - x[0]
+        r1 = tg[j, 1] - x[1]
+        r2 = tg[j, 2] - x[2]
+        d2 = r0 * r0 + r1 * r1 + r2 * r2
+        if d2 < bd[kk - 1]:  # insert into the sorted list of the kk nearest
+            q = kk - 1
+            while q > 0 and bd[q - 1] > d2:
+                bd[q] = bd[q - 1]
+                bi[q] = bi[q - 1]
+                q -= 1
+            bd[q] = d2
+            bi[q] = j
+    for q in range(kk):
+        if bi[q] >= 0 and np.sqrt(bd[q]) < reach[bi[q]]:
+            return bi[q]
+    return -1
+
+
+@numba.njit(cache=True)
+def _near_any(x, pts, radius):
+    """Is some point of pts (K, 3) closer than radius to x?"""
+    r2max = radius * radius
+    for j in range(pts.shape[0]):
+        r0 = pts[j, 0] - x[0]
+        r1 = pts[j, 1] - x[1]
+        r2 = pts[j, 2] - x[2]
+        if r0 * r0 + r1 * r1 + r2 * r2 < r2max:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def simple_chunk(state, start, n_rec, max_steps, chunk, step, floor, o, tau, b, h, lc2, ki, kernel, prune2,
+                 tg, reach, avoid, out_x, out_n, out_f, out_t):
+    """Up to `chunk` steps of the simple tracer X_{k+1} = X_k + s F_k / |F_k| with n from (16b).
+
+    state (3, 3): rows x, F, n of the last recorded point (updated in place); n_rec: points
+    recorded so far. Writes the new points, normals, forces, tensions into out_*; returns
+    (points written, status code, target hit or -1)."""
+    x = state[0].copy()
+    f = state[1].copy()
+    n = state[2].copy()
+    k = 0
+    while True:
+        if n_rec + k >= max_steps:
+            return k, STEP_LIMIT_C, -1
+        if k >= chunk:
+            state[0], state[1], state[2] = x, f, n
+            return k, CONTINUE, -1
+        p = f / np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
+        x_new = x + step * p  # 2004: X_{k+1} = X_k + s F_k / |F_k|
+        tang = x_new - x
+        tang /= max(np.sqrt(tang[0] * tang[0] + tang[1] * tang[1] + tang[2] * tang[2]), 1e-300)
+        sn, sf = _sample_light(x_new, tang, n, o, tau, b, h, lc2, ki, kernel, prune2)  # (16b)
+        x_prev = x
+        x = x_new
+        hit = target_hit(x, tg, reach)
+        if hit >= 0:  # the line ends on the target point
+            end = tg[hit].copy()
+            ne, fe = _sample_light(end, end - x_prev, n, o, tau, b, h, lc2, ki, kernel, prune2)
+            out_x[k], out_n[k], out_f[k] = end, ne, fe
+            out_t[k] = np.sqrt(fe[0] * fe[0] + fe[1] * fe[1] + fe[2] * fe[2])
+            return k + 1, ARRIVED_C, hit
+        tension = np.sqrt(sf[0] * sf[0] + sf[1] * sf[1] + sf[2] * sf[2])
+        out_x[k], out_n[k], out_f[k] = x, sn, sf
+        out_t[k] = tension
+        k += 1
+        if avoid.shape[0]:
+            dx = x - start
+            if dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2] > 4 * step * step and _near_any(x, avoid, step):
+                return k, TURNED_BACK_C, -1
+        if tension < floor or tension <= 0:
+            return k, TOO_WEAK_C, -1
+        if sf[0] * tang[0] + sf[1] * tang[1] + sf[2] * tang[2] < 0:
+            return k, STALLED_C, -1
+        f = sf
+        n = sn
