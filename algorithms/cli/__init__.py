@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-COMMANDS = ("info", "demos")
+COMMANDS = ("info", "demos", "hybrid")
 
 
 def command_modules() -> list[ModuleType]:

@@ -47,7 +47,7 @@ class Triangulation:
         self.twin_of: dict[tuple[int, int, float, float], tuple[int, int]] = {}
         self.n_alive = 0
         self.flip_test: Callable[[int, int], bool] = self._flip_test_uv
-        self.on_new_triangle: Callable[[int], None] | None = None
+        self.on_new_triangle: Callable[[list[int]], None] | None = None
         self.off_curve: dict[int, UV] = {}  # border vertices waiting to be moved onto F = 0
         self.failed_projections = 0
         a, b, c, d = self.surface.domain
@@ -85,8 +85,7 @@ class Triangulation:
 
     def _touched(self, *ts: int) -> None:
         if self.on_new_triangle is not None:
-            for t in ts:
-                self.on_new_triangle(t)
+            self.on_new_triangle(list(ts))
 
     def is_constrained(self, a: int, b: int) -> bool:
         return (a, b) in self.seg if a < b else (b, a) in self.seg

@@ -40,24 +40,44 @@ class HybridModel:
     def bisect(self, p: ArrayLike, q: ArrayLike, *, iterations: int = 60) -> NDArray[np.float64]:
         """Zero crossings of W on the parameter segments p→q (arrays (K, 2)), where W changes sign.
 
-        Pure bisection in the segment parameter (vectorised over K): the same segment always gives
-        the bitwise same point, so the cells on both sides of a grid side agree on its crossing.
+        Root finding in the segment parameter t, vectorised over K: the Illinois variant of regula
+        falsi (superlinear), keeping the sign-change bracket, until the bracket is below 1e-15 or
+        W is exactly zero. Deterministic: the same segment always gives the same point.
         """
         p = np.asarray(p, dtype=np.float64).reshape(-1, 2)
         q = np.asarray(q, dtype=np.float64).reshape(-1, 2)
-        lo = np.zeros(len(p))
-        hi = np.ones(len(p))
-        s_lo = self.W(p[:, 0], p[:, 1]) >= 0
+        n = len(p)
+        lo, hi = np.zeros(n), np.ones(n)
+        flo = self.W(p[:, 0], p[:, 1])
+        fhi = self.W(q[:, 0], q[:, 1])
+        t = np.full(n, 0.5)
+        side = np.zeros(n, dtype=np.int8)  # the end kept last time (Illinois halving)
+        active = np.ones(n, dtype=bool)
         for _ in range(iterations):
-            mid = 0.5 * (lo + hi)
-            x = p + mid[:, None] * (q - p)
-            s = self.W(x[:, 0], x[:, 1]) >= 0
-            same = s == s_lo
-            lo = np.where(same, mid, lo)
-            hi = np.where(same, hi, mid)
-            if np.all(hi - lo < 1e-17):
+            if not active.any():
                 break
-        t = 0.5 * (lo + hi)
+            i = np.flatnonzero(active)
+            den = fhi[i] - flo[i]
+            tt = np.where(den != 0, lo[i] - flo[i] * (hi[i] - lo[i]) / np.where(den != 0, den, 1.0),
+                          0.5 * (lo[i] + hi[i]))
+            bad = ~((tt > lo[i]) & (tt < hi[i]))
+            tt[bad] = 0.5 * (lo[i] + hi[i])[bad]
+            x = p[i] + tt[:, None] * (q[i] - p[i])
+            f = self.W(x[:, 0], x[:, 1])
+            t[i] = tt
+            same_lo = (f >= 0) == (flo[i] >= 0)
+            # move the end on the side of f; halve the other end's value if it was kept twice
+            j = i[same_lo]
+            lo[j], flo[j] = tt[same_lo], f[same_lo]
+            keep_hi = side[j] == 1
+            fhi[j[keep_hi]] *= 0.5
+            side[j] = 1
+            k = i[~same_lo]
+            hi[k], fhi[k] = tt[~same_lo], f[~same_lo]
+            keep_lo = side[k] == -1
+            flo[k[keep_lo]] *= 0.5
+            side[k] = -1
+            active[i] = ~((f == 0) | (hi[i] - lo[i] < 1e-15))
         return p + t[:, None] * (q - p)
 
     def project(self, uv: ArrayLike, direction: ArrayLike, reach: ArrayLike) -> tuple[NDArray, NDArray]:

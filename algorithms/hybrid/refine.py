@@ -19,7 +19,7 @@ import numpy as np
 
 from .border import CURVE
 from .cdt import BLOCKED, Triangulation
-from .incircle import circumcentre_3d, incircle_3d, local_frame, min_angle_3d, orient, to_local
+from .incircle import circumcentre_3d, local_frame, min_angle_3d, orient, to_local
 
 
 @dataclass(frozen=True)
@@ -73,6 +73,8 @@ class Refiner:
         self.inserted = 0
         self.seg_splits = 0
         self.skipped = 0
+        self.circle_cache: dict[tuple[int, int, int], tuple | None] = {}
+        self.dev_cache: dict[tuple[int, int, int], float] = {}
         self.fallbacks = 0
         a, b, c, d = tri.domain
         self.h = (1e-7 * (b - a), 1e-7 * (d - c))
@@ -84,15 +86,27 @@ class Refiner:
         key = (a, b) if a < b else (b, a)
         r = self.arc_cache.get(key)
         if r is None:
-            ua, ub = self.tri.uv[a], self.tri.uv[b]
-            s = np.array([0.25, 0.5, 0.75])
-            q = self.tri.surface(ua[0] + s * (ub[0] - ua[0]), ua[1] + s * (ub[1] - ua[1]))
-            pts = np.vstack([self.tri.p3[a], q, self.tri.p3[b]])
-            arc = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
-            chord = float(np.linalg.norm(pts[-1] - pts[0]))
-            r = chord / arc if arc > 0 else 1.0
-            self.arc_cache[key] = r
+            self._arcs([key])
+            r = self.arc_cache[key]
         return r
+
+    def _arcs(self, keys: list[tuple[int, int]]) -> None:
+        """chord / arc for edges: the arc is the polyline through the surface at 1/4, 1/2, 3/4 of
+        the parameter segment (one vectorised surface call for all the edges)."""
+        tri = self.tri
+        uv = np.array([[tri.uv[a], tri.uv[b]] for a, b in keys])  # (K, 2, 2)
+        s = np.array([0.25, 0.5, 0.75])[None, :, None]
+        mid = uv[:, :1] + s * (uv[:, 1:] - uv[:, :1])  # (K, 3, 2)
+        q = tri.surface(mid[..., 0], mid[..., 1])  # (K, 3, 3)
+        ends = np.array([[tri.p3[a], tri.p3[b]] for a, b in keys])
+        pts = np.concatenate([ends[:, :1], q, ends[:, 1:]], axis=1)
+        seg = np.diff(pts, axis=1)
+        arc = np.sqrt((seg * seg).sum(-1)).sum(-1)
+        d = ends[:, 1] - ends[:, 0]
+        chord = np.sqrt((d * d).sum(-1))
+        ratio = np.where(arc > 0, chord / np.where(arc > 0, arc, 1.0), 1.0)
+        for k, r in zip(keys, ratio.tolist()):
+            self.arc_cache[k] = r
 
     def badness(self, t: int) -> tuple[float, float] | None:
         """None for a good triangle, else its priority (smaller first)."""
@@ -104,7 +118,12 @@ class Refiner:
         if self.p.max_edge is not None and lmax > self.p.max_edge:
             return (0.0, -lmax)
         if self.p.chord_arc > 0:
-            worst = min(self.chord_arc(a, b), self.chord_arc(b, c), self.chord_arc(c, a))
+            cache = self.arc_cache
+            keys = [(x, y) if x < y else (y, x) for x, y in ((a, b), (b, c), (c, a))]
+            missing = [k for k in keys if k not in cache]
+            if missing:
+                self._arcs(missing)
+            worst = min(cache[k] for k in keys)
             if worst < self.p.chord_arc:
                 return (0.0, -lmax)
         if ang < self.p.min_angle:
@@ -113,6 +132,23 @@ class Refiner:
                 return None
             return (1.0, ang)
         return None
+
+    def push_many(self, ts: list[int]) -> None:
+        """Queue new triangles; their missing chord / arc ratios in one surface call."""
+        tri = self.tri
+        if self.p.chord_arc > 0:
+            cache = self.arc_cache
+            missing = set()
+            for t in ts:
+                a, b, c = tri.tv[t]
+                for x, y in ((a, b), (b, c), (c, a)):
+                    k = (x, y) if x < y else (y, x)
+                    if k not in cache:
+                        missing.add(k)
+            if missing:
+                self._arcs(sorted(missing))
+        for t in ts:
+            self.push(t)
 
     def push(self, t: int) -> None:
         tri = self.tri
@@ -143,6 +179,10 @@ class Refiner:
         (sampled), times the cylinder factor."""
         tri = self.tri
         a, b, c = tri.tv[t]
+        key3 = (a, b, c)
+        hit = self.dev_cache.get(key3)
+        if hit is not None:
+            return hit
         ua, ub, uc = np.array(tri.uv[a]), np.array(tri.uv[b]), np.array(tri.uv[c])
         # the centroid, the edge midpoints, and (choice) the vertices reflected through the edge
         # midpoints: the surface over the rest of the circumscribed disk, where the apexes of the
@@ -158,15 +198,53 @@ class Refiner:
             return self.lmin
         n = np.array(fr[2])
         dev = float(np.abs((q - np.array(A)) @ n).max())
-        return self.p.cylinder * dev + self.lmin
+        out = self.p.cylinder * dev + self.lmin
+        self.dev_cache[key3] = out
+        return out
+
+    def circle(self, t: int) -> tuple | None:
+        """(E3, r², A3, normal) of triangle t: its circumcircle in space (cached), the same circle
+        as the local-frame construction of Fig. 3 (incircle.incircle_3d)."""
+        tri = self.tri
+        a, b, c = tri.tv[t]
+        key = (a, b, c)
+        hit = self.circle_cache.get(key)
+        if hit is not None:
+            return hit
+        A, B, C = tri.p3[a], tri.p3[b], tri.p3[c]
+        ax, ay, az = A[0] - C[0], A[1] - C[1], A[2] - C[2]
+        bx, by, bz = B[0] - C[0], B[1] - C[1], B[2] - C[2]
+        nx, ny, nz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+        n2 = nx * nx + ny * ny + nz * nz
+        a2, b2 = ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz
+        if n2 <= 1e-30 * a2 * b2 or n2 == 0.0:
+            self.circle_cache[key] = None
+            return None
+        # E3 − C3 = ((|a|² b − |b|² a) × (a × b)) / (2 |a × b|²)
+        wx, wy, wz = a2 * bx - b2 * ax, a2 * by - b2 * ay, a2 * bz - b2 * az
+        ex = (wy * nz - wz * ny) / (2 * n2)
+        ey = (wz * nx - wx * nz) / (2 * n2)
+        ez = (wx * ny - wy * nx) / (2 * n2)
+        nl = math.sqrt(n2)
+        out = ((C[0] + ex, C[1] + ey, C[2] + ez), ex * ex + ey * ey + ez * ez, A, (nx / nl, ny / nl, nz / nl))
+        self.circle_cache[key] = out
+        return out
+
+    def in_cylinder(self, t: int, P: tuple, *, height: bool = True) -> bool:
+        """Fig. 3 with the cached circle: P projected on the triangle's plane inside the circumcircle,
+        and (height) |z′| ≤ l."""
+        cc = self.circle(t)
+        if cc is None:
+            return False
+        E, r2, A, n = cc
+        z = (P[0] - A[0]) * n[0] + (P[1] - A[1]) * n[1] + (P[2] - A[2]) * n[2]
+        dx, dy, dz = P[0] - E[0] - z * n[0], P[1] - E[1] - z * n[1], P[2] - E[2] - z * n[2]
+        if dx * dx + dy * dy + dz * dz >= r2 * (1.0 - 1e-12):
+            return False
+        return not height or abs(z) <= self.deviation(t)
 
     def flip_test(self, t2: int, v: int) -> bool:
-        tri = self.tri
-        a, b, c = tri.tv[t2]
-        A, B, C, P = tri.p3[a], tri.p3[b], tri.p3[c], tri.p3[v]
-        if not incircle_3d(A, B, C, P, math.inf):
-            return False
-        return incircle_3d(A, B, C, P, self.deviation(t2))
+        return self.in_cylinder(t2, self.tri.p3[v])
 
     # ---- eq. (7): the surface circumcentre --------------------------------------------------------------
     def surface_point(self, t: int, E3: tuple[float, float, float]) -> tuple[float, float, tuple] | None:
@@ -205,7 +283,7 @@ class Refiner:
             dv = -(-JtJ[1, 0] * g[0] + JtJ[0, 0] * g[1]) / det
             u += du
             v += dv
-            if abs(du) < 1e-13 * (self.box[1] - self.box[0]) and abs(dv) < 1e-13 * (self.box[3] - self.box[2]):
+            if abs(du) < 1e-11 * (self.box[1] - self.box[0]) and abs(dv) < 1e-11 * (self.box[3] - self.box[2]):
                 break
         q = tri.surface(np.array([u]), np.array([v]))[0]
         return u, v, (float(q[0]), float(q[1]), float(q[2]))
@@ -252,20 +330,23 @@ class Refiner:
         tri.uv[v] = target
         tri.p3[v] = (float(q[0]), float(q[1]), float(q[2]))
         tri.off_curve.pop(v, None)
-        for key in [k for k in self.arc_cache if v in k]:
-            del self.arc_cache[key]
+        for t in fan:  # cached edge ratios and deviations around v are stale now
+            tv = tri.tv[t]
+            self.dev_cache.pop((tv[0], tv[1], tv[2]), None)
+            self.circle_cache.pop((tv[0], tv[1], tv[2]), None)
+            for w in tv:
+                if w != v:
+                    self.arc_cache.pop((v, w) if v < w else (w, v), None)
         tri._legalize(v, [(t, tri.tv[t].index(v)) for t in fan])
-        for t in tri.fan(v):
-            self.push(t)
+        self.push_many(tri.fan(v))
         return True
 
     # ---- the main loop ----------------------------------------------------------------------------------------
     def run(self) -> RefineStats:
         tri = self.tri
         tri.flip_test = self.flip_test
-        tri.on_new_triangle = self.push
-        for t in range(len(tri.tv)):
-            self.push(t)
+        tri.on_new_triangle = self.push_many
+        self.push_many([t for t in range(len(tri.tv)) if tri.alive[t]])
         hit = False
         # sequential by nature: every insertion changes the triangles the next one sees
         while self.seg_queue or self.heap or self._retry_off_curve():
@@ -366,8 +447,7 @@ class Refiner:
                 n = tri.tn[t][k]
                 if n < 0 or n in seen:
                     continue
-                na, nb, nc = tri.tv[n]
-                if incircle_3d(tri.p3[na], tri.p3[nb], tri.p3[nc], P, math.inf):
+                if self.in_cylinder(n, P, height=False):
                     seen.add(n)
                     stack.append(n)
         return out

@@ -79,9 +79,18 @@ def bezier(control: ArrayLike, *, name: str = "bezier") -> Surface:
         raise ValueError(f"control: need an (n+1, m+1, 3) array with n, m >= 1, got shape {P.shape}")
     n, m = P.shape[0] - 1, P.shape[1] - 1
     P.setflags(write=False)
+    Pf = P.reshape(n + 1, (m + 1) * 3)
+    bn = np.array([math.comb(n, k) for k in range(n + 1)], dtype=np.float64)
+    bm = np.array([math.comb(m, k) for k in range(m + 1)], dtype=np.float64)
+    iu, iv = np.arange(n + 1), np.arange(m + 1)
 
     def ev(u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.einsum("...i,...j,ijk->...k", bernstein(n, u), bernstein(m, v), P)  # (8)
+        shape = u.shape
+        uu, vv = u.reshape(-1, 1), v.reshape(-1, 1)
+        Bu = bn * uu**iu * (1.0 - uu) ** (n - iu)  # B_i^n(u)
+        Bv = bm * vv**iv * (1.0 - vv) ** (m - iv)  # B_j^m(v)
+        out = ((Bu @ Pf).reshape(-1, m + 1, 3) * Bv[:, :, None]).sum(axis=1)  # (8)
+        return out.reshape(shape + (3,))
 
     return Surface(name, ev, (0.0, 1.0, 0.0, 1.0))
 
