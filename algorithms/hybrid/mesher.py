@@ -34,6 +34,7 @@ class HybridParams:
     delta: float = 0.4
     cylinder: float = 1.5
     corner_angle: float = 60.0
+    border_chord_arc: float = 0.99
     refine: bool = True
 
     def __post_init__(self) -> None:
@@ -46,7 +47,8 @@ class HybridParams:
             raise ValueError(f"corner_angle: must be in (0, 180], got {self.corner_angle}")
 
     def refine_params(self) -> RefineParams:
-        return RefineParams(self.min_angle, self.max_edge, self.chord_arc, self.max_triangles, self.cylinder)
+        return RefineParams(self.min_angle, self.max_edge, self.chord_arc, self.max_triangles, self.cylinder,
+                            self.border_chord_arc)
 
 
 @dataclass(frozen=True)

@@ -19,14 +19,16 @@ import numpy as np
 
 from .border import CURVE
 from .cdt import BLOCKED, Triangulation
-from .incircle import circumcentre_3d, local_frame, min_angle_3d, orient, to_local
+from .incircle import circumcentre_3d, circumcircle_2d, local_frame, min_angle_3d, orient, to_local
 
 
 @dataclass(frozen=True)
 class RefineParams:
     """min_angle: degrees (the bad-triangle threshold); max_edge: longest 3D edge (None: no limit);
     chord_arc: refine while an edge's chord / arc ratio is below this (0 disables);
-    max_triangles: stop refining beyond this count; cylinder: factor on the sampled deviation l of
+    max_triangles: stop refining beyond this count; border_chord_arc: (choice) the same curvature
+    criterion for the border curve F = 0 (chord against the two chords through its midpoint on
+    the curve), split while below; cylinder: factor on the sampled deviation l of
     the surface from a triangle's plane (the half-height of the in-circle cylinder, Fig. 3)."""
 
     min_angle: float = 30.0
@@ -34,6 +36,7 @@ class RefineParams:
     chord_arc: float = 0.98
     max_triangles: int = 200_000
     cylinder: float = 1.5
+    border_chord_arc: float = 0.99
 
     def __post_init__(self) -> None:
         if not 0 <= self.min_angle <= 34:
@@ -45,6 +48,8 @@ class RefineParams:
             raise ValueError(f"chord_arc: must be in [0, 1), got {self.chord_arc}")
         if self.max_triangles < 1:
             raise ValueError(f"max_triangles: must be at least 1, got {self.max_triangles}")
+        if not 0 <= self.border_chord_arc < 1:
+            raise ValueError(f"border_chord_arc: must be in [0, 1), got {self.border_chord_arc}")
         if not self.cylinder >= 1:
             raise ValueError(f"cylinder: must be at least 1, got {self.cylinder}")
 
@@ -73,6 +78,8 @@ class Refiner:
         self.inserted = 0
         self.seg_splits = 0
         self.skipped = 0
+        self.target_cache: dict[tuple[int, int], tuple[tuple[float, float], bool]] = {}
+        self.border_cache: dict[tuple[int, int], float] = {}
         self.circle_cache: dict[tuple[int, int, int], tuple | None] = {}
         self.dev_cache: dict[tuple[int, int, int], float] = {}
         self.fallbacks = 0
@@ -171,31 +178,61 @@ class Refiner:
             return True
         if self.p.max_edge is not None and _d2(P, Q) > self.p.max_edge ** 2:
             return True
-        return self.p.chord_arc > 0 and self.chord_arc(p, q) < self.p.chord_arc
+        if self.p.chord_arc > 0 and self.chord_arc(p, q) < self.p.chord_arc:
+            return True
+        return self.p.border_chord_arc > 0 and self.border_ratio(p, q) < self.p.border_chord_arc
+
+    def border_ratio(self, p: int, q: int) -> float:
+        """chord / arc of a curve segment, the arc through its midpoint on F = 0 (cached)."""
+        key = (p, q) if p < q else (q, p)
+        hit = self.border_cache.get(key)
+        if hit is not None:
+            return hit
+        tri = self.tri
+        sg = tri.seg.get(key)
+        r = 1.0
+        if sg is not None and sg[0] == CURVE:
+            target, ok = tri.midpoint_on_border(sg[1], sg[2], CURVE)
+            self.target_cache[key] = (target, ok)
+            if ok:
+                M = tri.surface(np.array([target[0]]), np.array([target[1]]))[0]
+                P, Q = np.array(tri.p3[p]), np.array(tri.p3[q])
+                arc = float(np.linalg.norm(M - P) + np.linalg.norm(Q - M))
+                r = float(np.linalg.norm(Q - P)) / arc if arc > 0 else 1.0
+        self.border_cache[key] = r
+        return r
 
     # ---- the 3D flip test (Fig. 3) ----------------------------------------------------------------------
     def deviation(self, t: int) -> float:
-        """l: the largest distance along the normal between triangle t and the surface over it
-        (sampled), times the cylinder factor."""
+        """l: the largest distance along the normal between the triangle's plane and the surface over
+        its circumscribed disk (where the points tested against it lie), sampled at the centroid, the
+        circumcentre and six points at 0.95 of the circumradius, mapped to (u, v) by the affine map
+        of the triangle; times the cylinder factor (choice)."""
         tri = self.tri
         a, b, c = tri.tv[t]
         key3 = (a, b, c)
         hit = self.dev_cache.get(key3)
         if hit is not None:
             return hit
-        ua, ub, uc = np.array(tri.uv[a]), np.array(tri.uv[b]), np.array(tri.uv[c])
-        # the centroid, the edge midpoints, and (choice) the vertices reflected through the edge
-        # midpoints: the surface over the rest of the circumscribed disk, where the apexes of the
-        # neighbours lie, is sampled too
-        s = np.array([(ua + ub + uc) / 3, (ua + ub) / 2, (ub + uc) / 2, (uc + ua) / 2,
-                      ub + uc - ua, uc + ua - ub, ua + ub - uc])
-        s[:, 0] = np.clip(s[:, 0], self.box[0], self.box[1])
-        s[:, 1] = np.clip(s[:, 1], self.box[2], self.box[3])
-        q = tri.surface(s[:, 0], s[:, 1])
         A, B, C = tri.p3[a], tri.p3[b], tri.p3[c]
         fr = local_frame(A, B, C)
         if fr is None:
             return self.lmin
+        bx = to_local(fr, A, B)[0]
+        cl = to_local(fr, A, C)
+        ex, ey, r2 = circumcircle_2d(bx, cl[0], cl[1])
+        r = 0.95 * math.sqrt(r2)
+        th = np.linspace(0, 2 * np.pi, 6, endpoint=False)
+        lx = np.r_[(bx + cl[0]) / 3, ex, ex + r * np.cos(th)]
+        ly = np.r_[cl[1] / 3, ey, ey + r * np.sin(th)]
+        lc = ly / cl[1]
+        lb = (lx - lc * cl[0]) / bx
+        la = 1.0 - lb - lc
+        uvs = np.array([tri.uv[a], tri.uv[b], tri.uv[c]])
+        s = la[:, None] * uvs[0] + lb[:, None] * uvs[1] + lc[:, None] * uvs[2]
+        s[:, 0] = np.clip(s[:, 0], self.box[0], self.box[1])
+        s[:, 1] = np.clip(s[:, 1], self.box[2], self.box[3])
+        q = tri.surface(s[:, 0], s[:, 1])
         n = np.array(fr[2])
         dev = float(np.abs((q - np.array(A)) @ n).max())
         out = self.p.cylinder * dev + self.lmin
@@ -303,8 +340,10 @@ class Refiner:
             found = tri.find_edge(x, y)
             if found is None:
                 continue
-            kind, fx, fy = tri.seg[(x, y) if x < y else (y, x)]
-            target, _ = tri.midpoint_on_border(fx, fy, kind)
+            key2 = (x, y) if x < y else (y, x)
+            kind, fx, fy = tri.seg[key2]
+            hit = self.target_cache.pop(key2, None) if kind == CURVE else None
+            target = hit[0] if hit is not None else tri.midpoint_on_border(fx, fy, kind)[0]
             ux, uy = tri.uv[fx], tri.uv[fy]
             mid = (0.5 * (ux[0] + uy[0]), 0.5 * (ux[1] + uy[1]))
             t, k = found
@@ -336,7 +375,10 @@ class Refiner:
             self.circle_cache.pop((tv[0], tv[1], tv[2]), None)
             for w in tv:
                 if w != v:
-                    self.arc_cache.pop((v, w) if v < w else (w, v), None)
+                    k2 = (v, w) if v < w else (w, v)
+                    self.arc_cache.pop(k2, None)
+                    self.border_cache.pop(k2, None)
+                    self.target_cache.pop(k2, None)
         tri._legalize(v, [(t, tri.tv[t].index(v)) for t in fan])
         self.push_many(tri.fan(v))
         return True
