@@ -18,6 +18,7 @@ next), so it is plain Python on floats; only the surface evaluations are vectori
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -46,6 +47,7 @@ class Triangulation:
         self.seg: dict[tuple[int, int], tuple[int, int, int]] = {}  # (lo, hi) -> (kind, from, to)
         self.twin_of: dict[tuple[int, int, float, float], tuple[int, int]] = {}
         self.n_alive = 0
+        self._seed = 12345
         self.flip_test: Callable[[int, int], bool] = self._flip_test_uv
         self.on_new_triangle: Callable[[list[int]], None] | None = None
         self.off_curve: dict[int, UV] = {}  # border vertices waiting to be moved onto F = 0
@@ -103,11 +105,11 @@ class Triangulation:
         """
         t = start
         uv, tv, tn = self.uv, self.tv, self.tn
-        r = 0
-        for _ in range(4 * len(tv) + 16):
+        for _ in range(8 * len(tv) + 16):
             v = tv[t]
             moved = False
-            r = (r + 1) % 3  # rotate the first edge tried (avoids walking in circles)
+            self._seed = (self._seed * 1103515245 + 12345) & 0x7FFFFFFF
+            r = self._seed % 3  # a random first edge: the walk cannot cycle in a non-Delaunay mesh
             for j in range(3):
                 k = (r + j) % 3
                 if orient(uv[v[(k + 1) % 3]], uv[v[(k + 2) % 3]], p) < 0:
@@ -129,17 +131,32 @@ class Triangulation:
 
     # ---- insertion -------------------------------------------------------------------------------
     def insert(self, v: int, t: int) -> list[int]:
-        """Insert vertex v (already added) into triangle t that contains it; returns new triangles."""
+        """Insert vertex v (already added) into triangle t that contains it; returns new triangles.
+
+        A point within 1e-9 (relative) of an edge is put exactly on it and splits the edge, so no
+        flat triangle is ever created.
+        """
         uv = self.uv
         p = uv[v]
         tv = self.tv[t]
-        # on an edge? (relative test: the orientation is tiny compared with the edge length squared)
+        best, kbest = math.inf, -1
         for k in range(3):
             a, b = uv[tv[(k + 1) % 3]], uv[tv[(k + 2) % 3]]
-            o = orient(a, b, p)
             l2 = (b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2
-            if abs(o) <= 1e-12 * l2:
-                return self.split_edge(t, k, v)
+            rel = orient(a, b, p) / l2 if l2 > 0 else 0.0
+            if rel < best:
+                best, kbest = rel, k
+        if best <= 1e-9:
+            a, b = uv[tv[(kbest + 1) % 3]], uv[tv[(kbest + 2) % 3]]
+            dx, dy = b[0] - a[0], b[1] - a[1]
+            s = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy)
+            s = min(max(s, 1e-6), 1 - 1e-6)
+            q = (a[0] + s * dx, a[1] + s * dy)
+            if q != p:
+                r = self.surface(np.array([q[0]]), np.array([q[1]]))[0]
+                uv[v] = q
+                self.p3[v] = (float(r[0]), float(r[1]), float(r[2]))
+            return self.split_edge(t, kbest, v)
         return self.split_triangle(t, v)
 
     def split_triangle(self, t: int, v: int) -> list[int]:
@@ -208,7 +225,8 @@ class Triangulation:
                 continue
             s = self.tv[t2][3 - self.tv[t2].index(p) - self.tv[t2].index(q)]
             # flip only a strictly convex quad, so the (u, v) triangulation stays valid
-            if orient(uv[v], uv[p], uv[s]) <= 0 or orient(uv[s], uv[q], uv[v]) <= 0:
+            d2 = (uv[v][0] - uv[s][0]) ** 2 + (uv[v][1] - uv[s][1]) ** 2
+            if orient(uv[v], uv[p], uv[s]) <= 1e-9 * d2 or orient(uv[s], uv[q], uv[v]) <= 1e-9 * d2:
                 continue
             if not self.flip_test(t2, v):
                 continue

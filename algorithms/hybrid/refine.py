@@ -278,7 +278,14 @@ class Refiner:
         dx, dy, dz = P[0] - E[0] - z * n[0], P[1] - E[1] - z * n[1], P[2] - E[2] - z * n[2]
         if dx * dx + dy * dy + dz * dz >= r2 * (1.0 - 1e-12):
             return False
-        return not height or abs(z) <= self.deviation(t)
+        if not height:
+            return True
+        # l: the sampled deviation of the surface (times the cylinder factor), but (choice) never
+        # less than half the circumradius: a point that far off the plane is on another sheet;
+        # nearer ones are the surface curving (a too thin cylinder stops the flips that remove
+        # bad triangles, and the refinement then cascades)
+        z = abs(z)
+        return z * z <= 0.25 * r2 or z <= self.deviation(t)
 
     def flip_test(self, t2: int, v: int) -> bool:
         return self.in_cylinder(t2, self.tri.p3[v])
