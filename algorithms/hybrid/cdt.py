@@ -130,11 +130,12 @@ class Triangulation:
         raise RuntimeError("empty triangulation")
 
     # ---- insertion -------------------------------------------------------------------------------
-    def insert(self, v: int, t: int) -> list[int]:
+    def insert(self, v: int, t: int, *, snap: bool = True) -> list[int]:
         """Insert vertex v (already added) into triangle t that contains it; returns new triangles.
 
         A point within 1e-9 (relative) of an edge is put exactly on it and splits the edge, so no
-        flat triangle is ever created.
+        flat triangle is ever created (snap=False: the point is never moved, only a point within
+        1e-12 splits the edge; Stage II, whose border points must stay exactly where they are).
         """
         uv = self.uv
         p = uv[v]
@@ -146,6 +147,10 @@ class Triangulation:
             rel = orient(a, b, p) / l2 if l2 > 0 else 0.0
             if rel < best:
                 best, kbest = rel, k
+        if not snap:
+            if abs(best) <= 1e-12:
+                return self.split_edge(t, kbest, v)
+            return self.split_triangle(t, v)
         if best <= 1e-9:
             a, b = uv[tv[(kbest + 1) % 3]], uv[tv[(kbest + 2) % 3]]
             dx, dy = b[0] - a[0], b[1] - a[1]
@@ -343,7 +348,7 @@ class Triangulation:
         for p, q in zip(border.points.tolist(), P3.tolist()):  # sequential incremental insertion
             v = self.add_vertex((p[0], p[1]), (q[0], q[1], q[2]))
             t, st, _ = self.locate(self.uv[v], t)
-            t = self.insert(v, t)[0]
+            t = self.insert(v, t, snap=False)[0]
             ids.append(v)
         ids_a = np.array(ids, dtype=np.int64)
         todo = [(int(ids_a[s0_]), int(ids_a[s1_]), int(k)) for (s0_, s1_), k in zip(border.segments, border.kinds)]
@@ -378,7 +383,7 @@ class Triangulation:
             m, _ = self.midpoint_on_border(fx, fy, kk)
             v = self.add_vertex(m)
             t, st, _ = self.locate(m, self.vtri[fx])
-            self.insert(v, t)
+            self.insert(v, t, snap=False)
             self._add_segment(fx, v, kk)
             self._add_segment(v, fy, kk)
             out += [(fx, v, kk), (v, fy, kk)]

@@ -460,6 +460,13 @@ class Refiner:
             if _d2(tri.p3[w], P3) <= (1e-9 * self.size) ** 2 or tri.uv[w] == uv:
                 return False
         enc = self.encroached_by(t2, P3)
+        tv = tri.tv[t2]
+        for k in range(3):  # on a border edge (within the snapping tolerance of insert): split it
+            p, q = tv[(k + 1) % 3], tv[(k + 2) % 3]
+            a, b = tri.uv[p], tri.uv[q]
+            l2 = (b[0] - a[0]) ** 2 + (b[1] - a[1]) ** 2
+            if tri.is_constrained(p, q) and orient(a, b, uv) <= 1e-9 * l2 and (p, q) not in enc:
+                enc.append((p, q))
         if enc:
             for p, q in enc:
                 self.split_segment(p, q)
