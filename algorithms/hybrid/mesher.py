@@ -15,6 +15,7 @@ from .border import CURVE, Border, build_border
 from .cdt import Triangulation
 from .model import HybridModel
 from .refine import RefineParams, Refiner, RefineStats
+from .smooth import smooth as smooth_pass
 
 
 @dataclass(frozen=True)
@@ -24,7 +25,8 @@ class HybridParams:
     cells: background grid cells along the longer direction (Stage I); delta: short-edge merge
     length as a fraction of the 3D cell diagonal (§2 step 3, default 40 %); corner_angle: trim
     corners sharper than this (degrees) are excepted from the angle bound and reported; the rest
-    are the Stage III parameters (:class:`RefineParams`)."""
+    are the Stage III parameters (:class:`RefineParams`); smooth: passes of the smart Laplacian
+    finishing step (smooth.py, choice: keeps the minimum angle, raises the median)."""
 
     min_angle: float = 30.0
     max_edge: float | None = None
@@ -35,6 +37,7 @@ class HybridParams:
     cylinder: float = 1.5
     corner_angle: float = 60.0
     border_chord_arc: float = 0.99
+    smooth: int = 4
     refine: bool = True
 
     def __post_init__(self) -> None:
@@ -43,6 +46,8 @@ class HybridParams:
             raise ValueError(f"cells: need at least 2, got {self.cells}")
         if not 0 <= self.delta < 1:
             raise ValueError(f"delta: must be in [0, 1), got {self.delta}")
+        if self.smooth < 0:
+            raise ValueError(f"smooth: the number of smoothing passes must be >= 0, got {self.smooth}")
         if not 0 < self.corner_angle <= 180:
             raise ValueError(f"corner_angle: must be in (0, 180], got {self.corner_angle}")
 
@@ -82,6 +87,7 @@ class HybridResult:
     max_border_distance: float
     timings: dict[str, float] = field(default_factory=dict)
     refine_stats: RefineStats | None = None
+    smoothed_moves: int = 0
 
     @property
     def stats_before(self) -> AngleStats:
@@ -120,6 +126,7 @@ class HybridResult:
                 "final_border_vertices": int(len(self.border_vertices)),
                 "inserted_circumcentres": rs.inserted if rs else 0,
                 "border_splits": rs.segment_splits if rs else 0,
+                "smoothing_moves": self.smoothed_moves,
             },
             "angles_before": self.stats_before.as_dict(),
             "angles_after": self.stats_after.as_dict(),
@@ -205,6 +212,9 @@ def mesh_hybrid(model: HybridModel, params: HybridParams | None = None) -> Hybri
         ref = Refiner(tri, p.refine_params(), corners=set(corners.tolist()))
         stats = ref.run()  # Stage III
     times["stage3_refine"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    moved = smooth_pass(tri, passes=p.smooth) if p.refine and p.smooth else 0
+    times["smooth"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     f = tri.faces()
@@ -238,4 +248,4 @@ def mesh_hybrid(model: HybridModel, params: HybridParams | None = None) -> Hybri
     times["output"] = time.perf_counter() - t0
     times["total"] = sum(times.values())
     return HybridResult(model, p, border, uv0, p30, f0, uv, pts, faces, mesh, weld, before, after,
-                        corner_tris, cv, bv, max_f, max_d, times, stats)
+                        corner_tris, cv, bv, max_f, max_d, times, stats, moved)
