@@ -170,7 +170,21 @@ def main(argv=None) -> int:
                     help="our curvature criterion (chord / arc ratio) for the runs")
     ap.add_argument("--json", help="also write the rows as JSON")
     args = ap.parse_args(argv)
-    rows = []
+    rows: list[list] = []
+
+    def flush() -> None:  # after every row, so an interrupted run still leaves its table
+        headers = ["surface", "target", "mesher", "triangles", "min angle", "1st pct", "median", "<20° %", "<30° %",
+                   "chordal max (rel.)", "chordal mean (rel.)", "time s"]
+        body = ("## Hybrid surface meshing against Gmsh\n\n"
+                "`/work/venv/bin/python -m bench.hybrid` (bench/hybrid.py). Same surfaces for both: the paper's "
+                "Bezier patch with the r = 0.4 hole and the interstage compartment (assets/hybrid). Gmsh 4 through "
+                "OpenCASCADE with a uniform size (MeshSizeMax tuned to our triangle count, no curvature sizing); "
+                f"ours with min angle 30°, chord/arc {args.chord_arc} and max_edge tuned to the target. Angles in "
+                "degrees over per-triangle minimum angles; chordal deviation: distance from triangle centroids and "
+                "edge midpoints to the exact surface over the model size. Times are wall-clock on a shared machine "
+                "(other jobs running).\n\n" + table(headers, rows))
+        write_section("hybrid", body)
+
     for name in args.surfaces:
         path = demo(name, "hybrid").path
         spec = load_spec(path)
@@ -191,6 +205,7 @@ def main(argv=None) -> int:
             rows.append([name, target, "bridgefield", n, st.min, st.p01, st.median, 100 * st.below_20,
                          100 * st.below_30, cmax, cmean, dt])
             print(rows[-1], flush=True)
+            flush()
             for alg, label in ((6, "Gmsh Frontal-Delaunay"), (5, "Gmsh Delaunay"), (1, "Gmsh MeshAdapt")):
                 def peer(hh, alg=alg):
                     X, F, t = gmsh_mesh(name, data, hh, alg)
@@ -202,17 +217,7 @@ def main(argv=None) -> int:
                 rows.append([name, target, label, n2, st2.min, st2.p01, st2.median, 100 * st2.below_20,
                              100 * st2.below_30, cmax2, cmean2, dt2])
                 print(rows[-1], flush=True)
-    headers = ["surface", "target", "mesher", "triangles", "min angle", "1st pct", "median", "<20° %", "<30° %",
-               "chordal max (rel.)", "chordal mean (rel.)", "time s"]
-    body = ("## Hybrid surface meshing against Gmsh\n\n"
-            "`/work/venv/bin/python -m bench.hybrid` (bench/hybrid.py). Same surfaces for both: the paper's "
-            "Bezier patch with the r = 0.4 hole and the interstage compartment (assets/hybrid). Gmsh 4 through "
-            "OpenCASCADE with a uniform size (MeshSizeMax tuned to our triangle count, no curvature sizing); "
-            f"ours with min angle 30°, chord/arc {args.chord_arc} and max_edge tuned to the target. Angles in "
-            "degrees over per-triangle minimum angles; chordal deviation: distance from triangle centroids and "
-            "edge midpoints to the exact surface over the model size. Times are wall-clock on a shared machine "
-            "(other jobs running).\n\n" + table(headers, rows))
-    write_section("hybrid", body)
+                flush()
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=1)
