@@ -42,7 +42,8 @@ def test_identities():
 
 
 def test_primitives_signs():
-    assert circle_z(0.0, 0.0, 1.0) == 1.0 and circle_z(2.0, 0.0, 1.0) < 0 and circle_z(0.6, 0.8, 1.0) == pytest.approx(0)
+    assert circle_z(0.0, 0.0, 1.0) == 1.0 and circle_z(2.0, 0.0, 1.0) < 0
+    assert circle_z(0.6, 0.8, 1.0) == pytest.approx(0)
     assert rect(0.0, 0.0, 2.0, 1.0) > 0 and rect(0.9, 0.4, 2.0, 1.0) > 0
     assert rect(1.1, 0.0, 2.0, 1.0) < 0 and rect(0.0, 0.6, 2.0, 1.0) < 0
     assert rect(1.0, 0.2, 2.0, 1.0) == pytest.approx(0, abs=1e-12)
