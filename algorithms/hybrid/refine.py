@@ -1,0 +1,510 @@
+"""Stage III: Ruppert-style Delaunay refinement on the surface (spec/hybrid.md §4).
+
+Both geometric tests are done on the surface: the flip test is the 3D cylinder in-circle test of
+Fig. 3 (6), and the point inserted for a bad triangle is its surface circumcentre, the parameter
+point E minimising |R(u, v) − E3| (7) (Gauss-Newton from the affine guess). A triangle is bad
+when its smallest 3D angle is below the threshold, its longest 3D edge exceeds the size limit, or
+an edge's chord / arc ratio is below the curvature limit. When the circumcentre lies behind a
+border edge or encroaches one (inside its diametral ball in 3D), the border edge is split instead,
+at its midpoint on the border curve (F = 0 by root finding), together with its seam twin.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .border import CURVE
+from .cdt import BLOCKED, Triangulation
+from .incircle import circumcentre_3d, circumcircle_2d, local_frame, min_angle_3d, orient, to_local
+
+
+@dataclass(frozen=True)
+class RefineParams:
+    """min_angle: degrees (the bad-triangle threshold); max_edge: longest 3D edge (None: no limit);
+    chord_arc: refine while an edge's chord / arc ratio is below this (0 disables);
+    max_triangles: stop refining beyond this count; border_chord_arc: (choice) the same curvature
+    criterion for the border curve F = 0 (chord against the two chords through its midpoint on
+    the curve), split while below; cylinder: factor on the sampled deviation l of
+    the surface from a triangle's plane (the half-height of the in-circle cylinder, Fig. 3)."""
+
+    min_angle: float = 30.0
+    max_edge: float | None = None
+    chord_arc: float = 0.98
+    max_triangles: int = 200_000
+    cylinder: float = 1.5
+    border_chord_arc: float = 0.99
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.min_angle <= 34:
+            raise ValueError(f"min_angle: must be in [0, 34] degrees (refinement does not terminate "
+                             f"above about 34), got {self.min_angle}")
+        if self.max_edge is not None and not self.max_edge > 0:
+            raise ValueError(f"max_edge: must be positive, got {self.max_edge}")
+        if not 0 <= self.chord_arc < 1:
+            raise ValueError(f"chord_arc: must be in [0, 1), got {self.chord_arc}")
+        if self.max_triangles < 1:
+            raise ValueError(f"max_triangles: must be at least 1, got {self.max_triangles}")
+        if not 0 <= self.border_chord_arc < 1:
+            raise ValueError(f"border_chord_arc: must be in [0, 1), got {self.border_chord_arc}")
+        if not self.cylinder >= 1:
+            raise ValueError(f"cylinder: must be at least 1, got {self.cylinder}")
+
+
+@dataclass(frozen=True)
+class RefineStats:
+    inserted: int
+    segment_splits: int
+    skipped_corner: int
+    hit_limit: bool
+    off_curve: int
+
+
+class Refiner:
+    """Runs Stage III on a Triangulation built by Stage II."""
+
+    def __init__(self, tri: Triangulation, params: RefineParams, *, corners: set[int] | None = None) -> None:
+        self.tri = tri
+        self.p = params
+        self.size = tri.surface.size
+        self.corners = corners or set()
+        self.heap: list[tuple[float, float, int, int, tuple[int, int, int]]] = []
+        self.seg_queue: list[tuple[int, int]] = []
+        self.counter = 0
+        self.arc_cache: dict[tuple[int, int], float] = {}
+        self.inserted = 0
+        self.seg_splits = 0
+        self.skipped = 0
+        self.target_cache: dict[tuple[int, int], tuple[tuple[float, float], bool]] = {}
+        self.border_cache: dict[tuple[int, int], float] = {}
+        self.circle_cache: dict[tuple[int, int, int], tuple | None] = {}
+        self.dev_cache: dict[tuple[int, int, int], float] = {}
+        self.fallbacks = 0
+        a, b, c, d = tri.domain
+        self.h = (1e-7 * (b - a), 1e-7 * (d - c))
+        self.box = (a - (b - a), b + (b - a), c - (d - c), d + (d - c))
+        self.lmin = 1e-9 * self.size
+
+    # ---- quality -----------------------------------------------------------------------------------
+    def chord_arc(self, a: int, b: int) -> float:
+        key = (a, b) if a < b else (b, a)
+        r = self.arc_cache.get(key)
+        if r is None:
+            self._arcs([key])
+            r = self.arc_cache[key]
+        return r
+
+    def _arcs(self, keys: list[tuple[int, int]]) -> None:
+        """chord / arc for edges: the arc is the polyline through the surface at 1/4, 1/2, 3/4 of
+        the parameter segment (one vectorised surface call for all the edges)."""
+        tri = self.tri
+        uv = np.array([[tri.uv[a], tri.uv[b]] for a, b in keys])  # (K, 2, 2)
+        s = np.array([0.25, 0.5, 0.75])[None, :, None]
+        mid = uv[:, :1] + s * (uv[:, 1:] - uv[:, :1])  # (K, 3, 2)
+        q = tri.surface(mid[..., 0], mid[..., 1])  # (K, 3, 3)
+        ends = np.array([[tri.p3[a], tri.p3[b]] for a, b in keys])
+        pts = np.concatenate([ends[:, :1], q, ends[:, 1:]], axis=1)
+        seg = np.diff(pts, axis=1)
+        arc = np.sqrt((seg * seg).sum(-1)).sum(-1)
+        d = ends[:, 1] - ends[:, 0]
+        chord = np.sqrt((d * d).sum(-1))
+        ratio = np.where(arc > 0, chord / np.where(arc > 0, arc, 1.0), 1.0)
+        for k, r in zip(keys, ratio.tolist()):
+            self.arc_cache[k] = r
+
+    def badness(self, t: int) -> tuple[float, float] | None:
+        """None for a good triangle, else its priority (smaller first)."""
+        tri = self.tri
+        a, b, c = tri.tv[t]
+        A, B, C = tri.p3[a], tri.p3[b], tri.p3[c]
+        ang, k = min_angle_3d(A, B, C)
+        lmax = math.sqrt(max(_d2(A, B), _d2(B, C), _d2(C, A)))
+        if self.p.max_edge is not None and lmax > self.p.max_edge:
+            return (0.0, -lmax)
+        if self.p.chord_arc > 0:
+            cache = self.arc_cache
+            keys = [(x, y) if x < y else (y, x) for x, y in ((a, b), (b, c), (c, a))]
+            missing = [k for k in keys if k not in cache]
+            if missing:
+                self._arcs(missing)
+            worst = min(cache[k] for k in keys)
+            if worst < self.p.chord_arc:
+                return (0.0, -lmax)
+        if ang < self.p.min_angle:
+            if (a, b, c)[k] in self.corners:
+                self.skipped += 1
+                return None
+            return (1.0, ang)
+        return None
+
+    def push_many(self, ts: list[int]) -> None:
+        """Queue new triangles; their missing chord / arc ratios in one surface call."""
+        tri = self.tri
+        if self.p.chord_arc > 0:
+            cache = self.arc_cache
+            missing = set()
+            for t in ts:
+                a, b, c = tri.tv[t]
+                for x, y in ((a, b), (b, c), (c, a)):
+                    k = (x, y) if x < y else (y, x)
+                    if k not in cache:
+                        missing.add(k)
+            if missing:
+                self._arcs(sorted(missing))
+        for t in ts:
+            self.push(t)
+
+    def push(self, t: int) -> None:
+        tri = self.tri
+        if not tri.alive[t]:
+            return
+        tv = tri.tv[t]
+        # encroached border edges of this triangle (by its own apex): queue them first (Ruppert)
+        for k in range(3):
+            p, q = tv[(k + 1) % 3], tv[(k + 2) % 3]
+            if tri.is_constrained(p, q) and self.segment_bad(p, q, tv[k]):
+                self.seg_queue.append((p, q))
+        bad = self.badness(t)
+        if bad is not None:
+            self.counter += 1
+            heapq.heappush(self.heap, (bad[0], bad[1], self.counter, t, (tv[0], tv[1], tv[2])))
+
+    def segment_bad(self, p: int, q: int, apex: int) -> bool:
+        P, Q, R = self.tri.p3[p], self.tri.p3[q], self.tri.p3[apex]
+        if _dot_sub(P, R, Q, R) < 0:  # the apex is inside the diametral ball: encroached
+            return True
+        if self.p.max_edge is not None and _d2(P, Q) > self.p.max_edge ** 2:
+            return True
+        if self.p.chord_arc > 0 and self.chord_arc(p, q) < self.p.chord_arc:
+            return True
+        return self.p.border_chord_arc > 0 and self.border_ratio(p, q) < self.p.border_chord_arc
+
+    def border_ratio(self, p: int, q: int) -> float:
+        """chord / arc of a curve segment, the arc through its midpoint on F = 0 (cached)."""
+        key = (p, q) if p < q else (q, p)
+        hit = self.border_cache.get(key)
+        if hit is not None:
+            return hit
+        tri = self.tri
+        sg = tri.seg.get(key)
+        r = 1.0
+        if sg is not None and sg[0] == CURVE:
+            target, ok = tri.midpoint_on_border(sg[1], sg[2], CURVE)
+            self.target_cache[key] = (target, ok)
+            if ok:
+                M = tri.surface(np.array([target[0]]), np.array([target[1]]))[0]
+                P, Q = np.array(tri.p3[p]), np.array(tri.p3[q])
+                arc = float(np.linalg.norm(M - P) + np.linalg.norm(Q - M))
+                r = float(np.linalg.norm(Q - P)) / arc if arc > 0 else 1.0
+        self.border_cache[key] = r
+        return r
+
+    # ---- the 3D flip test (Fig. 3) ----------------------------------------------------------------------
+    def deviation(self, t: int) -> float:
+        """l: the largest distance along the normal between the triangle's plane and the surface over
+        its circumscribed disk (where the points tested against it lie), sampled at the centroid, the
+        circumcentre and six points at 0.95 of the circumradius, mapped to (u, v) by the affine map
+        of the triangle; times the cylinder factor (choice)."""
+        tri = self.tri
+        a, b, c = tri.tv[t]
+        key3 = (a, b, c)
+        hit = self.dev_cache.get(key3)
+        if hit is not None:
+            return hit
+        A, B, C = tri.p3[a], tri.p3[b], tri.p3[c]
+        fr = local_frame(A, B, C)
+        if fr is None:
+            return self.lmin
+        bx = to_local(fr, A, B)[0]
+        cl = to_local(fr, A, C)
+        ex, ey, r2 = circumcircle_2d(bx, cl[0], cl[1])
+        r = 0.95 * math.sqrt(r2)
+        th = np.linspace(0, 2 * np.pi, 6, endpoint=False)
+        lx = np.r_[(bx + cl[0]) / 3, ex, ex + r * np.cos(th)]
+        ly = np.r_[cl[1] / 3, ey, ey + r * np.sin(th)]
+        lc = ly / cl[1]
+        lb = (lx - lc * cl[0]) / bx
+        la = 1.0 - lb - lc
+        uvs = np.array([tri.uv[a], tri.uv[b], tri.uv[c]])
+        s = la[:, None] * uvs[0] + lb[:, None] * uvs[1] + lc[:, None] * uvs[2]
+        s[:, 0] = np.clip(s[:, 0], self.box[0], self.box[1])
+        s[:, 1] = np.clip(s[:, 1], self.box[2], self.box[3])
+        q = tri.surface(s[:, 0], s[:, 1])
+        n = np.array(fr[2])
+        dev = float(np.abs((q - np.array(A)) @ n).max())
+        out = self.p.cylinder * dev + self.lmin
+        self.dev_cache[key3] = out
+        return out
+
+    def circle(self, t: int) -> tuple | None:
+        """(E3, r², A3, normal) of triangle t: its circumcircle in space (cached), the same circle
+        as the local-frame construction of Fig. 3 (incircle.incircle_3d)."""
+        tri = self.tri
+        a, b, c = tri.tv[t]
+        key = (a, b, c)
+        hit = self.circle_cache.get(key)
+        if hit is not None:
+            return hit
+        A, B, C = tri.p3[a], tri.p3[b], tri.p3[c]
+        ax, ay, az = A[0] - C[0], A[1] - C[1], A[2] - C[2]
+        bx, by, bz = B[0] - C[0], B[1] - C[1], B[2] - C[2]
+        nx, ny, nz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+        n2 = nx * nx + ny * ny + nz * nz
+        a2, b2 = ax * ax + ay * ay + az * az, bx * bx + by * by + bz * bz
+        if n2 <= 1e-30 * a2 * b2 or n2 == 0.0:
+            self.circle_cache[key] = None
+            return None
+        # E3 − C3 = ((|a|² b − |b|² a) × (a × b)) / (2 |a × b|²)
+        wx, wy, wz = a2 * bx - b2 * ax, a2 * by - b2 * ay, a2 * bz - b2 * az
+        ex = (wy * nz - wz * ny) / (2 * n2)
+        ey = (wz * nx - wx * nz) / (2 * n2)
+        ez = (wx * ny - wy * nx) / (2 * n2)
+        nl = math.sqrt(n2)
+        out = ((C[0] + ex, C[1] + ey, C[2] + ez), ex * ex + ey * ey + ez * ez, A, (nx / nl, ny / nl, nz / nl))
+        self.circle_cache[key] = out
+        return out
+
+    def in_cylinder(self, t: int, P: tuple, *, height: bool = True) -> bool:
+        """Fig. 3 with the cached circle: P projected on the triangle's plane inside the circumcircle,
+        and (height) |z′| ≤ l."""
+        cc = self.circle(t)
+        if cc is None:
+            return False
+        E, r2, A, n = cc
+        z = (P[0] - A[0]) * n[0] + (P[1] - A[1]) * n[1] + (P[2] - A[2]) * n[2]
+        dx, dy, dz = P[0] - E[0] - z * n[0], P[1] - E[1] - z * n[1], P[2] - E[2] - z * n[2]
+        if dx * dx + dy * dy + dz * dz >= r2 * (1.0 - 1e-12):
+            return False
+        if not height:
+            return True
+        # l: the sampled deviation of the surface (times the cylinder factor), but (choice) never
+        # less than half the circumradius: a point that far off the plane is on another sheet;
+        # nearer ones are the surface curving (a too thin cylinder stops the flips that remove
+        # bad triangles, and the refinement then cascades)
+        z = abs(z)
+        return z * z <= 0.25 * r2 or z <= self.deviation(t)
+
+    def flip_test(self, t2: int, v: int) -> bool:
+        return self.in_cylinder(t2, self.tri.p3[v])
+
+    # ---- eq. (7): the surface circumcentre --------------------------------------------------------------
+    def surface_point(self, t: int, E3: tuple[float, float, float]) -> tuple[float, float, tuple] | None:
+        tri = self.tri
+        a, b, c = tri.tv[t]
+        A, B, C = tri.p3[a], tri.p3[b], tri.p3[c]
+        fr = local_frame(A, B, C)
+        if fr is None:
+            return None
+        bx = to_local(fr, A, B)[0]
+        cl = to_local(fr, A, C)
+        el = to_local(fr, A, E3)
+        # barycentric coordinates of E3′ in A′B′C′, carried over to (u, v): the starting point
+        lc = el[1] / cl[1]
+        lb = (el[0] - lc * cl[0]) / bx
+        la = 1.0 - lb - lc
+        ua, ub, uc = tri.uv[a], tri.uv[b], tri.uv[c]
+        u = la * ua[0] + lb * ub[0] + lc * uc[0]
+        v = la * ua[1] + lb * ub[1] + lc * uc[1]
+        e = np.array(E3)
+        hu, hv = self.h
+        R = None
+        for _ in range(6):  # Gauss-Newton on |R(u, v) − E3|²  (7)
+            u = min(max(u, self.box[0]), self.box[1])
+            v = min(max(v, self.box[2]), self.box[3])
+            q = tri.surface(np.array([u, u + hu, u]), np.array([v, v, v + hv]))
+            R = q[0]
+            J = np.stack([(q[1] - R) / hu, (q[2] - R) / hv], axis=1)
+            r = R - e
+            JtJ = J.T @ J
+            det = JtJ[0, 0] * JtJ[1, 1] - JtJ[0, 1] * JtJ[1, 0]
+            if det <= 0:
+                break
+            g = J.T @ r
+            du = -(JtJ[1, 1] * g[0] - JtJ[0, 1] * g[1]) / det
+            dv = -(-JtJ[1, 0] * g[0] + JtJ[0, 0] * g[1]) / det
+            u += du
+            v += dv
+            if abs(du) < 1e-11 * (self.box[1] - self.box[0]) and abs(dv) < 1e-11 * (self.box[3] - self.box[2]):
+                break
+        q = tri.surface(np.array([u]), np.array([v]))[0]
+        return u, v, (float(q[0]), float(q[1]), float(q[2]))
+
+    # ---- segment splitting --------------------------------------------------------------------------------
+    def split_segment(self, a: int, b: int) -> bool:
+        tri = self.tri
+        key = (a, b) if a < b else (b, a)
+        sg = tri.seg.get(key)
+        if sg is None:
+            return False
+        pairs = [(a, b)]
+        tw = tri.twin_segment(a, b, sg[0])
+        if tw is not None:
+            pairs.append(tw)
+        for x, y in pairs:
+            found = tri.find_edge(x, y)
+            if found is None:
+                continue
+            key2 = (x, y) if x < y else (y, x)
+            kind, fx, fy = tri.seg[key2]
+            hit = self.target_cache.pop(key2, None) if kind == CURVE else None
+            target = hit[0] if hit is not None else tri.midpoint_on_border(fx, fy, kind)[0]
+            ux, uy = tri.uv[fx], tri.uv[fy]
+            mid = (0.5 * (ux[0] + uy[0]), 0.5 * (ux[1] + uy[1]))
+            t, k = found
+            v = tri.add_vertex(mid)
+            tri.split_edge(t, k, v)
+            if kind == CURVE:
+                self.move_onto_curve(v, target)
+            self.seg_splits += 1
+        tri.index_seams()
+        return True
+
+    def move_onto_curve(self, v: int, target: tuple[float, float]) -> bool:
+        """Move a border vertex from its chord midpoint onto F = 0 if its fan stays valid in (u, v)."""
+        tri = self.tri
+        fan = tri.fan(v)
+        for t in fan:
+            tv = tri.tv[t]
+            i = tv.index(v)
+            if orient(target, tri.uv[tv[(i + 1) % 3]], tri.uv[tv[(i + 2) % 3]]) <= 0:
+                tri.off_curve[v] = target
+                return False
+        q = tri.surface(np.array([target[0]]), np.array([target[1]]))[0]
+        tri.uv[v] = target
+        tri.p3[v] = (float(q[0]), float(q[1]), float(q[2]))
+        tri.off_curve.pop(v, None)
+        for t in fan:  # cached edge ratios and deviations around v are stale now
+            tv = tri.tv[t]
+            self.dev_cache.pop((tv[0], tv[1], tv[2]), None)
+            self.circle_cache.pop((tv[0], tv[1], tv[2]), None)
+            for w in tv:
+                if w != v:
+                    k2 = (v, w) if v < w else (w, v)
+                    self.arc_cache.pop(k2, None)
+                    self.border_cache.pop(k2, None)
+                    self.target_cache.pop(k2, None)
+        tri._legalize(v, [(t, tri.tv[t].index(v)) for t in fan])
+        self.push_many(tri.fan(v))
+        return True
+
+    # ---- the main loop ----------------------------------------------------------------------------------------
+    def run(self) -> RefineStats:
+        tri = self.tri
+        tri.flip_test = self.flip_test
+        tri.on_new_triangle = self.push_many
+        self.push_many([t for t in range(len(tri.tv)) if tri.alive[t]])
+        hit = False
+        # sequential by nature: every insertion changes the triangles the next one sees
+        while self.seg_queue or self.heap or self._retry_off_curve():
+            if tri.n_alive >= self.p.max_triangles:
+                hit = True
+                break
+            if self.seg_queue:
+                p, q = self.seg_queue.pop()
+                if tri.is_constrained(p, q) and tri.find_edge(p, q) is not None:
+                    t, k = tri.find_edge(p, q)
+                    if self.segment_bad(p, q, tri.tv[t][k]):
+                        self.split_segment(p, q)
+                continue
+            _, _, _, t, verts = heapq.heappop(self.heap)
+            if not tri.alive[t] or tuple(tri.tv[t]) != verts:
+                continue
+            if self.badness(t) is None:
+                continue
+            self.refine_triangle(t)
+        tri.on_new_triangle = None
+        return RefineStats(self.inserted, self.seg_splits, self.skipped, hit, len(tri.off_curve))
+
+    def _retry_off_curve(self) -> bool:
+        """Once the queues are empty: move border vertices still on their chords onto F = 0."""
+        moved = False
+        for v, target in list(self.tri.off_curve.items()):
+            if v in self.tri.off_curve and self.move_onto_curve(v, target):
+                moved = True
+        return moved
+
+    def refine_triangle(self, t: int) -> None:
+        tri = self.tri
+        a, b, c = tri.tv[t]
+        E3 = circumcentre_3d(tri.p3[a], tri.p3[b], tri.p3[c])
+        sp = self.surface_point(t, E3) if E3 is not None else None
+        if sp is not None:
+            u, v, P3 = sp
+            t2, status, k = tri.locate((u, v), t, stop_at_segments=True)
+            if status == BLOCKED:
+                # the circumcentre lies behind a border edge: split that edge if it encroaches it
+                # (Ruppert); far from the border on a coarse, strongly curved mesh it may not
+                tv = tri.tv[t2]
+                p, q = tv[(k + 1) % 3], tv[(k + 2) % 3]
+                if _dot_sub(tri.p3[p], P3, tri.p3[q], P3) < 0:
+                    self.split_segment(p, q)
+                    self._requeue(t)
+                    return
+            else:
+                if self._insert_or_split(t, t2, (u, v), P3):
+                    return
+        # fallback: the parameter-space centroid of t (inside t by construction)
+        ua, ub, uc = tri.uv[a], tri.uv[b], tri.uv[c]
+        g = ((ua[0] + ub[0] + uc[0]) / 3.0, (ua[1] + ub[1] + uc[1]) / 3.0)
+        q = tri.surface(np.array([g[0]]), np.array([g[1]]))[0]
+        self._insert_or_split(t, t, g, (float(q[0]), float(q[1]), float(q[2])))
+        self.fallbacks += 1
+
+    def _insert_or_split(self, t: int, t2: int, uv: tuple[float, float], P3: tuple) -> bool:
+        """Insert the point (in triangle t2) unless it encroaches border edges: split those."""
+        tri = self.tri
+        for w in tri.tv[t2]:  # the point is a vertex already (its triangle survived an earlier insertion)
+            if _d2(tri.p3[w], P3) <= (1e-9 * self.size) ** 2 or tri.uv[w] == uv:
+                return False
+        enc = self.encroached_by(t2, P3)
+        if enc:
+            for p, q in enc:
+                self.split_segment(p, q)
+            self._requeue(t)
+            return True
+        before = tuple(tri.tv[t])
+        vnew = tri.add_vertex(uv, P3)
+        tri.insert(vnew, t2)
+        self.inserted += 1
+        if tri.alive[t] and tuple(tri.tv[t]) == before:
+            # no flip could remove t (the quad was not convex in (u, v)): try it again; the point
+            # is now a vertex, so the next attempt takes the centroid
+            self._requeue(t)
+        return True
+
+    def _requeue(self, t: int) -> None:
+        if self.tri.alive[t]:
+            self.push(t)
+
+    def encroached_by(self, t0: int, P: tuple[float, float, float]) -> list[tuple[int, int]]:
+        tri = self.tri
+        seen = {t0}
+        stack = [t0]
+        out: list[tuple[int, int]] = []
+        while stack and len(seen) < 400:
+            t = stack.pop()
+            tv = tri.tv[t]
+            for k in range(3):
+                p, q = tv[(k + 1) % 3], tv[(k + 2) % 3]
+                if tri.is_constrained(p, q):
+                    if _dot_sub(tri.p3[p], P, tri.p3[q], P) < 0:
+                        out.append((p, q))
+                    continue
+                n = tri.tn[t][k]
+                if n < 0 or n in seen:
+                    continue
+                if self.in_cylinder(n, P, height=False):
+                    seen.add(n)
+                    stack.append(n)
+        return out
+
+
+def _d2(A: tuple, B: tuple) -> float:
+    return (A[0] - B[0]) ** 2 + (A[1] - B[1]) ** 2 + (A[2] - B[2]) ** 2
+
+
+def _dot_sub(A: tuple, P: tuple, B: tuple, Q: tuple) -> float:
+    return (A[0] - P[0]) * (B[0] - Q[0]) + (A[1] - P[1]) * (B[1] - Q[1]) + (A[2] - P[2]) * (B[2] - Q[2])
