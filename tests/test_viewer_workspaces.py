@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from PySide6.QtCore import Qt
 
 pytest.importorskip("pytestqt")
 
-from viewer.workspaces import HybridWorkspace  # noqa: E402
+import re  # noqa: E402
+
+from viewer.workspaces import FrepWorkspace, HybridWorkspace  # noqa: E402
 
 pytestmark = pytest.mark.gui
 
@@ -80,4 +83,57 @@ def test_hybrid_stale_results_dropped_and_bad_spec_reported(qtbot, tmp_path):
     qtbot.waitUntil(lambda: w.current is not None and not w.busy, timeout=40_000)
     assert w.current.params.cells == 12
     assert w.runner.dropped >= 1
+    _close(qtbot, w)
+
+
+def test_frep_stages_on_the_timeline_with_metrics_and_pixels(qtbot):
+    w = FrepWorkspace(demo=None)
+    qtbot.addWidget(w)
+    w.show()
+    qtbot.waitExposed(w)
+    w.qlev_spin.setValue(4)
+    w.blev_spin.setValue(10)
+    w.open_demo("sphere")
+    qtbot.waitUntil(lambda: w.current is not None and not w.busy, timeout=30_000)
+    assert w.error is None
+    run = w.current
+    names = [s.name for s in run.stages]
+    assert names == ["points", "quads", "holes", "filled", "region", "refined", "faired"]
+    assert w.stage_slider.maximum() == len(names) - 1 and w.stage_index() == len(names) - 1
+    m = run.result.metrics
+    assert m.topology.watertight
+    # the metrics dock shows the numbers of the run
+    text = w.metrics_label.text()
+    assert f"{m.vertices} / {m.faces}" in text
+    cv = re.search(r"edge-length CV</td><td align='right'>([0-9.]+)", text)
+    assert cv and abs(float(cv.group(1)) - m.edge_cv) < 1e-2 and 0 < m.edge_cv < 1
+    assert re.search(r"vertex mean / p95 / max</td><td align='right'>[0-9.]+", text)
+    final = w.plotter.screenshot(return_img=True)
+    assert _not_blank(final) > 0.05  # a real render: the sphere covers part of the view
+    assert w.histogram.counts.sum() == m.faces
+
+    # the timeline: first, next, next shows the holes with their loops highlighted
+    qtbot.mouseClick(w.first_btn, Qt.MouseButton.LeftButton)
+    assert w.stage_index() == 0 and "points" in w.stage_label.text()
+    assert "loops" not in w.plotter.actors
+    pts = w.plotter.screenshot(return_img=True)
+    assert _not_blank(pts) > 0.01
+    assert np.abs(pts.astype(int) - final.astype(int)).sum(axis=2).astype(bool).mean() > 0.01
+    qtbot.mouseClick(w.next_btn, Qt.MouseButton.LeftButton)
+    assert w.stage_index() == 1 and "quads" in w.stage_label.text()
+    qtbot.mouseClick(w.next_btn, Qt.MouseButton.LeftButton)
+    assert w.stage_index() == 2 and "hole loops" in w.stage_label.text()
+    assert len(run.result.loops) > 0 and "loops" in w.plotter.actors
+    assert w.histogram.counts.sum() == len(run.stages[2].faces)
+    # play runs to the end and stops
+    w.play_timer.setInterval(30)
+    qtbot.mouseClick(w.play_btn, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: not w.play_btn.isChecked(), timeout=5_000)
+    assert w.stage_index() == len(names) - 1 and "loops" not in w.plotter.actors
+
+    # QLEV up: recomputed, a finer mesh
+    w.qlev_spin.setValue(5)
+    qtbot.waitUntil(lambda: w.current is not run and not w.busy, timeout=30_000)
+    assert w.current.params.qlev == 5
+    assert w.current.result.metrics.faces > m.faces
     _close(qtbot, w)

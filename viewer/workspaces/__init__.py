@@ -1,5 +1,6 @@
 """The explorer's workspaces: self-contained widgets the main window opens."""
 
+from .frep import FrepWorkspace
 from .hybrid import HybridWorkspace
 
-__all__ = ["HybridWorkspace"]
+__all__ = ["FrepWorkspace", "HybridWorkspace"]
