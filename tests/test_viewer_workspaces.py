@@ -10,7 +10,8 @@ pytest.importorskip("pytestqt")
 
 import re  # noqa: E402
 
-from viewer.workspaces import FrepWorkspace, HybridWorkspace  # noqa: E402
+from algorithms.demos import demo  # noqa: E402
+from viewer.workspaces import FrepWorkspace, HybridWorkspace, open_workspace  # noqa: E402
 
 pytestmark = pytest.mark.gui
 
@@ -136,4 +137,15 @@ def test_frep_stages_on_the_timeline_with_metrics_and_pixels(qtbot):
     qtbot.waitUntil(lambda: w.current is not run and not w.busy, timeout=30_000)
     assert w.current.params.qlev == 5
     assert w.current.result.metrics.faces > m.faces
+    _close(qtbot, w)
+
+
+def test_open_workspace_as_a_window_on_a_spec(qtbot):
+    w = open_workspace("frep", spec=str(demo("torus", "frep").path))
+    qtbot.addWidget(w)
+    assert w.isWindow() and w.isVisible()
+    w.qlev_spin.setValue(4)  # a user lowers QLEV: the debounced recompute replaces the first run
+    qtbot.waitUntil(lambda: w.current is not None and w.current.params.qlev == 4 and not w.busy, timeout=30_000)
+    assert w.current.name == "torus"
+    assert w.current.result.metrics.topology.genus == 1
     _close(qtbot, w)

@@ -164,27 +164,33 @@ class AngleHistogram(FigureCanvasQTAgg):
     def show_angles(self, angles: NDArray[np.float64], *, label: str = "after",
                     overlay: NDArray[np.float64] | None = None, overlay_label: str = "before",
                     threshold: float | None = None, show_overlay: bool = True,
-                    colour: str = "#4c8cbf", overlay_colour: str = "#d62728") -> None:
+                    colour: str = "#4c8cbf", overlay_colour: str = "#d62728", share: bool = False) -> None:
+        """Plot the histogram of ``angles`` (degrees); ``share``: heights in % of each series'
+        triangles (so that series of very different sizes compare), else counts."""
         ax = self.ax
         ax.clear()
         edges, counts = angle_histogram(np.asarray(angles, dtype=np.float64))
         self.edges, self.counts = edges, counts
         self.stats = angle_stats(angles)
         width = np.diff(edges)
-        ax.bar(edges[:-1], counts, width=width, align="edge", color=colour, edgecolor="#333333",
+
+        def height(c: NDArray[np.int64]) -> NDArray[np.float64]:
+            return 100.0 * c / max(int(c.sum()), 1) if share else c.astype(np.float64)
+
+        ax.bar(edges[:-1], height(counts), width=width, align="edge", color=colour, edgecolor="#333333",
                linewidth=0.5, label=f"{label} ({len(angles)})", alpha=0.85)
         self.overlay_counts = None
         if overlay is not None and show_overlay:
             _, oc = angle_histogram(np.asarray(overlay, dtype=np.float64))
             self.overlay_counts = oc
-            ax.stairs(oc, edges, color=overlay_colour, linewidth=1.5, label=f"{overlay_label} ({len(overlay)})")
+            ax.stairs(height(oc), edges, color=overlay_colour, linewidth=1.5, label=f"{overlay_label} ({len(overlay)})")
         if threshold is not None:
             ax.axvline(threshold, color="#2ca02c", linestyle="--", linewidth=1.2, label=f"threshold {threshold:g}°")
         for a, c in ((20, "#999999"), (30, "#666666")):
             ax.axvline(a, color=c, linestyle=":", linewidth=0.8)
         ax.set_xlim(0, 60)
         ax.set_xlabel("triangle min angle (°)")
-        ax.set_ylabel("triangles")
+        ax.set_ylabel("% of triangles" if share else "triangles")
         ax.legend(loc="upper left", fontsize=7, frameon=False)
         s = self.stats
         if s.count:

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import (
+    QApplication,
     QCheckBox,
     QComboBox,
     QDockWidget,
@@ -96,6 +97,9 @@ class FrepWorkspace(QWidget):
         self.runner.failed.connect(self._show_error)
         self.runner.busy_changed.connect(self._on_busy)
         self._recompute_timer = debounce(self, 350, self.recompute)
+        app = QApplication.instance()
+        if app is not None:  # a window destroyed with its parent gets no closeEvent
+            app.aboutToQuit.connect(self.shutdown)
         self.play_timer = QTimer(self)
         self.play_timer.setInterval(800)
         self.play_timer.timeout.connect(self._play_step)
@@ -441,10 +445,13 @@ class FrepWorkspace(QWidget):
         if self._closed:
             return
         self._closed = True
-        self.play_timer.stop()
-        self._recompute_timer.stop()
-        self.runner.shutdown()
-        self.plotter.close()
+        try:
+            self.play_timer.stop()
+            self._recompute_timer.stop()
+            self.runner.shutdown()
+            self.plotter.close()
+        except RuntimeError:  # the Qt objects were already deleted with a parent
+            pass
 
     def closeEvent(self, event) -> None:  # noqa: N802 (Qt API)
         self.shutdown()

@@ -19,6 +19,7 @@ from matplotlib.figure import Figure
 from numpy.typing import NDArray
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
+    QApplication,
     QCheckBox,
     QComboBox,
     QDockWidget,
@@ -116,6 +117,9 @@ class HybridWorkspace(QWidget):
         self.runner.failed.connect(self._on_failed)
         self.runner.busy_changed.connect(self._on_busy)
         self._recompute_timer = debounce(self, 350, self.recompute)
+        app = QApplication.instance()
+        if app is not None:  # a window destroyed with its parent gets no closeEvent
+            app.aboutToQuit.connect(self.shutdown)
 
         inner = QMainWindow(self)
         inner.setWindowFlags(Qt.WindowType.Widget)
@@ -232,7 +236,8 @@ class HybridWorkspace(QWidget):
         self.corner_check.setChecked(True)
         self.overlay_check = QCheckBox("overlay the other stage on the histogram")
         self.overlay_check.setChecked(True)
-        for c in (self.edges_check, self.border_check, self.corner_check, self.overlay_check):
+        self.share_check = QCheckBox("histogram in % of each stage's triangles")
+        for c in (self.edges_check, self.border_check, self.corner_check, self.overlay_check, self.share_check):
             c.toggled.connect(lambda _b: self._redraw())
             form.addRow(c)
 
@@ -408,7 +413,8 @@ class HybridWorkspace(QWidget):
                                    overlay_label="before" if after else "after",
                                    threshold=self.threshold_spin.value(), show_overlay=self.overlay_check.isChecked(),
                                    colour=AFTER_COLOUR if after else BEFORE_COLOUR,
-                                   overlay_colour=BEFORE_COLOUR if after else AFTER_COLOUR)
+                                   overlay_colour=BEFORE_COLOUR if after else AFTER_COLOUR,
+                                   share=self.share_check.isChecked())
         self.stats_label.setText(stats_text(r.stats_after, label=f"after (threshold {m.params.min_angle:g}°)") + "\n"
                                  + stats_text(r.stats_before, label="before") + "\n"
                                  + stats_text(r.stats_excluding_corners, label="after, trim corners excepted"))
@@ -419,9 +425,12 @@ class HybridWorkspace(QWidget):
         if self._closed:
             return
         self._closed = True
-        self._recompute_timer.stop()
-        self.runner.shutdown()
-        self.plotter.close()
+        try:
+            self._recompute_timer.stop()
+            self.runner.shutdown()
+            self.plotter.close()
+        except RuntimeError:  # the Qt objects were already deleted with a parent
+            pass
 
     def closeEvent(self, event) -> None:  # noqa: N802 (Qt API)
         self.shutdown()
