@@ -377,17 +377,17 @@ class FrepWorkspace(QWidget):
         if len(s.faces):
             hl = s.highlight if s.highlight is not None else np.zeros(len(s.faces), bool)
             pd = surface(s.vertices, s.faces, cell_data={"highlight": hl.astype(np.int64)})
-            pl.add_mesh(pd, scalars="highlight", cmap=[PLAIN, HIGHLIGHT], clim=(0, 1), categories=True,
+            pl.add_mesh(pd, render=False, scalars="highlight", cmap=[PLAIN, HIGHLIGHT], clim=(0, 1), categories=True,
                         show_scalar_bar=False, name="stage", show_edges=self.edges_check.isChecked(),
                         edge_color="#5a6673", line_width=0.5, ambient=0.25)
         else:
-            pl.add_mesh(points(s.vertices), color="#1f77b4", point_size=6, render_points_as_spheres=True,
+            pl.add_mesh(points(s.vertices), render=False, color="#1f77b4", point_size=6, render_points_as_spheres=True,
                         name="stage")
         if s.loops:
-            pl.add_mesh(polylines([s.vertices[lp] for lp in s.loops], closed=True), color="#d62728",
+            pl.add_mesh(polylines([s.vertices[lp] for lp in s.loops], closed=True), render=False, color="#d62728",
                         line_width=5, render_lines_as_tubes=True, name="loops")
         else:
-            pl.remove_actor("loops")
+            pl.remove_actor("loops", render=False)
         pl.render()
         n_hl = int(s.highlight.sum()) if s.highlight is not None else 0
         extra = f", {len(s.loops)} hole loops" if s.loops else (f", {n_hl} highlighted" if n_hl else "")

@@ -379,7 +379,8 @@ class HybridWorkspace(QWidget):
         pts, faces, ang = ((r.points, r.faces, r.min_angle_after) if after
                            else (r.initial_points, r.initial_faces, r.min_angle_before))
         pd = surface(pts, faces, cell_data={"min angle (°)": ang})
-        self.plotter.add_mesh(pd, scalars="min angle (°)", cmap="RdYlGn", clim=(0.0, 60.0), name="surface",
+        self.plotter.add_mesh(pd, render=False, scalars="min angle (°)", cmap="RdYlGn", clim=(0.0, 60.0),
+                              name="surface",
                               show_edges=self.edges_check.isChecked() and len(faces) < 60000,
                               edge_color="#404a55", line_width=0.4,
                               ambient=0.3, diffuse=0.75,
@@ -387,14 +388,14 @@ class HybridWorkspace(QWidget):
                                                "vertical": False, "position_x": 0.25, "position_y": 0.03,
                                                "height": 0.07, "width": 0.5, "color": "black"})
         if self.border_check.isChecked() and m.border_3d:
-            self.plotter.add_mesh(polylines(m.border_3d), color="#1f3fbf", line_width=3, name="border")
+            self.plotter.add_mesh(polylines(m.border_3d), render=False, color="#1f3fbf", line_width=3, name="border")
         else:
-            self.plotter.remove_actor("border")
+            self.plotter.remove_actor("border", render=False)
         if after and self.corner_check.isChecked() and len(r.corner_triangles):
             pc = surface(r.points, r.faces[r.corner_triangles])
-            self.plotter.add_mesh(pc, style="wireframe", color="black", line_width=2.5, name="corners")
+            self.plotter.add_mesh(pc, render=False, style="wireframe", color="black", line_width=2.5, name="corners")
         else:
-            self.plotter.remove_actor("corners")
+            self.plotter.remove_actor("corners", render=False)
         uv, uvf = (r.uv, r.faces) if after else (r.initial_uv, r.initial_faces)
         self.uv_canvas.show_mesh(uv, uvf, m.border_uv, r.model.surface.domain,
                                  f"{m.name}: {'refined' if after else 'Stage II'} mesh in (u, v), "
