@@ -84,7 +84,45 @@ def test_hybrid_stale_results_dropped_and_bad_spec_reported(qtbot, tmp_path):
     qtbot.waitUntil(lambda: w.current is not None and not w.busy, timeout=40_000)
     assert w.current.params.cells == 12
     assert w.runner.dropped >= 1
+    # Cancel: the busy indicator goes at once and the running job's result is dropped on return
+    kept, dropped = w.current, w.runner.dropped
+    w.chord_spin.setValue(0.95)
+    w.recompute()
+    assert not w.progress.isHidden() and w.cancel_btn.isEnabled()
+    qtbot.mouseClick(w.cancel_btn, Qt.MouseButton.LeftButton)
+    assert not w.busy and w.progress.isHidden() and not w.cancel_btn.isEnabled()
+    qtbot.waitUntil(lambda: w.runner.dropped > dropped, timeout=30_000)
+    assert w.current is kept
     _close(qtbot, w)
+
+
+def test_job_runner_latest_request_wins(qtbot):
+    import threading
+
+    from viewer.workspaces.common import JobRunner
+
+    gate = threading.Event()
+
+    def job(x):
+        gate.wait(5)
+        if x == "boom":
+            raise ValueError("bad input")
+        return x
+
+    r = JobRunner()
+    got, errors = [], []
+    r.finished.connect(got.append)
+    r.failed.connect(errors.append)
+    for x in (1, 2, 3):  # 1 runs; 2 is replaced by 3 before it starts
+        r.submit(job, x)
+    assert r.busy
+    gate.set()
+    qtbot.waitUntil(lambda: not r.busy, timeout=5_000)
+    assert got == [3] and r.dropped == 1
+    r.submit(job, "boom")
+    qtbot.waitUntil(lambda: bool(errors), timeout=5_000)
+    assert errors == ["ValueError: bad input"] and got == [3]
+    r.shutdown()
 
 
 def test_frep_stages_on_the_timeline_with_metrics_and_pixels(qtbot):

@@ -73,7 +73,13 @@ class JobRunner(QObject):
 
     @property
     def busy(self) -> bool:
-        return self._running is not None or self._pending is not None
+        """A result is awaited (a cancelled job may still occupy the thread: see ``running``)."""
+        return self._pending is not None or (self._running is not None and self._running == self._gen)
+
+    @property
+    def running(self) -> bool:
+        """The pool thread is computing (possibly a job whose result will be dropped)."""
+        return self._running is not None
 
     def submit(self, fn: Callable[..., Any], *args: Any) -> int:
         if self._closed:
