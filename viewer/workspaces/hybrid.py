@@ -58,6 +58,7 @@ class MeshedSurface:
     result: HybridResult
     border_3d: list[NDArray[np.float64]]
     border_uv: list[NDArray[np.float64]]
+    report: dict
 
 
 def mesh_surface(spec: Spec, params: HybridParams) -> MeshedSurface:
@@ -67,7 +68,7 @@ def mesh_surface(spec: Spec, params: HybridParams) -> MeshedSurface:
     chains_uv = [b.points[np.asarray(c)] for c in b.polylines if len(c) > 1]
     chains_3d = [np.asarray(spec.model.surface(c[:, 0], c[:, 1]), dtype=np.float64).reshape(-1, 3)
                  for c in chains_uv]
-    return MeshedSurface(spec.model.name, params, r, chains_3d, chains_uv)
+    return MeshedSurface(spec.model.name, params, r, chains_3d, chains_uv, r.report())
 
 
 class UVCanvas(FigureCanvasQTAgg):
@@ -353,7 +354,7 @@ class HybridWorkspace(QWidget):
         self.error = None
         r = m.result
         t = r.timings
-        c = r.report()["counts"]
+        c = m.report["counts"]
         self.status.setText(
             f"{m.name}: {c['triangles_initial']} → {c['triangles_final']} triangles, "
             f"{c['inserted_circumcentres']} circumcentres, {c['border_splits']} border splits, "
