@@ -49,3 +49,12 @@ def polylines(chains: list[NDArray[np.float64]], *, closed: bool = False,
 
 def points(p: NDArray[np.float64]) -> pv.PolyData:
     return pv.PolyData(np.asarray(p, dtype=np.float64).reshape(-1, 3))
+
+
+def surface(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
+            cell_data: dict[str, NDArray] | None = None) -> pv.PolyData:
+    """A triangle surface with per-triangle arrays (e.g. the min angle, a highlight mask)."""
+    pd = polydata((np.asarray(vertices), np.asarray(faces)))
+    for k, a in (cell_data or {}).items():
+        pd.cell_data[k] = np.asarray(a)
+    return pd
