@@ -8,10 +8,11 @@ import sys
 def run_app(path: str | None = None, demo: str | None = None, points: str | None = None) -> int:
     from PySide6.QtWidgets import QApplication
 
-    from .main_window import MainWindow
-
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("Bridgefield")
+    app.setOrganizationName("Bridgefield")
+    from .main_window import MainWindow
+
     win = MainWindow()
     win.show()
     if path:

@@ -58,3 +58,68 @@ def surface(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
     for k, a in (cell_data or {}).items():
         pd.cell_data[k] = np.asarray(a)
     return pd
+
+
+def polyline_prefix(pts: NDArray[np.float64], k: int, *, out: pv.PolyData | None = None) -> pv.PolyData:
+    """A polyline over the first k of the points (all points kept, so it updates in place).
+
+    With ``out``, only the line connectivity of that mesh changes (cheap: the animation's frame).
+    """
+    pts = np.asarray(pts, dtype=np.float64)
+    k = max(1, min(int(k), len(pts)))
+    ids = np.arange(k) if k > 1 else np.array([0, 0])
+    lines = np.concatenate([[len(ids)], ids])
+    if out is None:
+        return pv.PolyData(pts.copy(), lines=lines)
+    out.lines = lines
+    return out
+
+
+def tubes(chains: list[NDArray[np.float64]], values: NDArray[np.float64], *, radius: float,
+          name: str = "value", sides: int = 10) -> pv.PolyData:
+    """Tubes around polylines, one scalar per line carried on every tube point."""
+    parts = []
+    for c, v in zip(chains, values):
+        c = np.asarray(c, dtype=np.float64)
+        if len(c) < 2:
+            continue
+        keep = np.concatenate([[True], np.linalg.norm(np.diff(c, axis=0), axis=1) > 1e-12])
+        c = c[keep]  # the tube filter fails on repeated points
+        if len(c) < 2:
+            continue
+        t = polyline(c).tube(radius=radius, n_sides=sides, capping=True)
+        t.point_data[name] = np.full(t.n_points, float(v))
+        parts.append(t)
+    if not parts:
+        return pv.PolyData()
+    return pv.merge(parts) if len(parts) > 1 else parts[0]
+
+
+_ARROW: pv.PolyData | None = None
+
+
+def _unit_arrow() -> pv.PolyData:
+    global _ARROW
+    if _ARROW is None:
+        _ARROW = pv.Arrow(start=(0.0, 0.0, 0.0), direction=(1.0, 0.0, 0.0), scale=1.0, tip_length=0.3,
+                          tip_radius=0.12, shaft_radius=0.04, tip_resolution=12, shaft_resolution=12)
+    return _ARROW
+
+
+def arrow_points(start: NDArray[np.float64], direction: NDArray[np.float64], length: float) -> NDArray[np.float64]:
+    """The points of the unit arrow placed at start along a unit direction (numpy only: cheap per frame)."""
+    d = np.asarray(direction, dtype=np.float64)
+    d = d / (np.linalg.norm(d) or 1.0)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    u = np.cross(d, helper)
+    u /= np.linalg.norm(u)
+    w = np.cross(d, u)
+    p = np.asarray(_unit_arrow().points)
+    return np.asarray(start, dtype=np.float64) + float(length) * (p[:, :1] * d + p[:, 1:2] * u + p[:, 2:3] * w)
+
+
+def arrow(start: NDArray[np.float64], direction: NDArray[np.float64], length: float) -> pv.PolyData:
+    """An arrow from start along a direction (same topology every time: update its points in place)."""
+    a = _unit_arrow().copy()
+    a.points = arrow_points(start, direction, length)
+    return a

@@ -1,0 +1,1 @@
+"""The explorer's docks: parameters, bridges table, inspector, timeline, plot."""
