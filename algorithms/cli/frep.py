@@ -29,9 +29,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fairing", choices=("U2", "U1", "none"), default="U2", help="fairing of the new vertices")
     p.add_argument("--no-project", action="store_true",
                    help="leave the new vertices where fairing puts them (default: moved onto F = 0)")
-    p.add_argument("--smooth", type=int, default=0, metavar="K",
-                   help="K rounds of tangential smoothing of all vertices, each projected onto F = 0 "
-                        "(evens out edge lengths; moves the sample points off their rays; default 0)")
+    p.add_argument("--smooth", type=int, default=None, metavar="K",
+                   help="K rounds of isotropic improvement: valence edge flips and tangential CVT relaxation "
+                        "of all vertices, each projected onto F = 0 (evens out edge lengths and angles; moves the "
+                        "sample points off their rays; default: FrepParams.smooth = 10; 0 = the paper's pipeline)")
     p.add_argument("--report", metavar="R.json", help="write the JSON report (stages, metrics, timings)")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
 
@@ -53,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
                         merge_sides=not args.no_merge, refine=not args.no_refine,
                         fairing="none" if args.no_refine else args.fairing,
                         side_slope=max(args.side_slope, 1e-6), project=not args.no_project,
-                        smooth=args.smooth)
+                        **({} if args.smooth is None else {"smooth": args.smooth}))
     obj = load_spec(input_path(args))
     result = triangulate_object(obj, params)
     if not len(result.mesh.faces):

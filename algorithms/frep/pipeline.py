@@ -3,7 +3,8 @@
 sampling (quadtree + rays) -> linking (quads ABCD -> ABC, ACD) -> holes (loops of one-face
 edges) -> filling (Liepa's minimum-weight triangulation) -> merging the patches with the
 neighbouring faces of zero projected area (the sides parallel to the rays) -> refinement
-(centroid splits + edge flips) -> fairing (U2 = 0) -> metrics.
+(centroid splits + edge flips) -> fairing (U2 = 0) -> (choice) isotropic improvement (valence
+flips + tangential CVT relaxation on F = 0, ``smooth`` rounds; remesh.py) -> metrics.
 
 Filling, refinement and fairing are the shared darning code (:mod:`algorithms.darning`), the
 same implementation the repair pipeline uses.
@@ -24,6 +25,7 @@ from ..topology import boundary_loops, edge_table, face_adjacency
 from .linking import DIAGONALS, Linked, link
 from .metrics import FrepMetrics, first_order_distance, measure, project
 from .objects import FRepObject
+from .remesh import improve
 from .sampling import Samples, SamplingParams, sample
 
 WEIGHTS = ("area", "length")
@@ -44,7 +46,9 @@ class FrepParams:
     density: float = float(np.sqrt(2.0))  # alpha of the split test (1 = the spec literally, sqrt 2 = Liepa)
     fairing: str = "U2"  # U2 = 0 (bi-Laplacian), U1 = 0 (umbrella) or "none"
     project: bool = True  # (choice) finally move the new vertices onto F = 0 along the gradient
-    smooth: int = 0  # (choice) rounds of tangential Laplacian smoothing of all vertices, each projected onto F = 0
+    # (choice) rounds of isotropic improvement of all vertices (remesh.py: valence flips + tangential
+    # CVT relaxation, each projected onto F = 0); 0 = the paper's pipeline exactly
+    smooth: int = 10
 
     def __post_init__(self) -> None:
         SamplingParams(self.qlev, self.blev)  # validates qlev and blev
@@ -102,6 +106,7 @@ class FrepResult:
     timings: dict[str, float] = field(default_factory=dict)
     splits: int = 0
     flips: int = 0
+    improve_flips: int = 0  # valence flips of the isotropic improvement (params.smooth rounds)
 
     @property
     def mesh(self) -> Mesh:
@@ -141,6 +146,7 @@ class FrepResult:
             "region_faces": int(self.region.sum()),
             "splits": self.splits,
             "flips": self.flips,
+            "improve_flips": self.improve_flips,
             "metrics": self.metrics.as_dict(),
             "timings": dict(self.timings),
         }
@@ -177,24 +183,6 @@ def _merge_region(faces: NDArray[np.int64], patch: NDArray[np.bool_], side: NDAr
     out = np.zeros(len(faces), dtype=bool)
     out[idx[has_patch[lab]]] = True
     return out
-
-
-def tangential_smooth(obj: FRepObject, vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
-                      rounds: int, step: float = 0.5) -> NDArray[np.float64]:
-    """(choice) Move every vertex towards the mean of its neighbours within the tangent plane
-    (normal -grad F), then back onto F = 0; evens out edge lengths and angles."""
-    from ..darning.fair import uniform_laplacian
-
-    L = uniform_laplacian(len(vertices), faces)  # (L p)_v = mean of the neighbours - p_v
-    p = np.array(vertices, dtype=np.float64, copy=True)
-    used = np.unique(faces)
-    for _ in range(rounds):  # sequential: each round starts from the previous positions
-        u = (L @ p)[used]
-        g = obj.gradient(p[used])
-        g /= np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)
-        u -= np.einsum("ij,ij->i", u, g)[:, None] * g
-        p[used] = project(obj, p[used] + step * u, steps=3)
-    return p
 
 
 def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: object) -> FrepResult:
@@ -263,13 +251,17 @@ def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: 
         worse = np.bincount(lab[idx], weights=gain, minlength=lab.max() + 1) > 0
         start = np.where(worse[lab][:, None], RV, FV)
         FV[new] = project(obj, start[new])
-    if params.smooth:
-        FV = tangential_smooth(obj, FV, RF, rounds=params.smooth)
-    faired = Mesh(FV, RF)
+    faired_faces = RF
     timings["fairing"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    improve_flips = 0
+    if params.smooth:  # (choice) isotropic improvement: valence flips + tangential CVT relaxation on F = 0
+        FV, faired_faces, improve_flips = improve(obj, FV, RF, rounds=params.smooth)
+    faired = Mesh(FV, faired_faces)
+    timings["improvement"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     metrics = measure(obj, faired, voxel=float(obj.size[:2].max()) / 2**params.qlev)
     timings["metrics"] = time.perf_counter() - t0
     timings["total"] = sum(v for k, v in timings.items() if k != "metrics")
     return FrepResult(obj, params, s, linked, quad_mesh, loops, filled, filled_patch, region, refined, new,
-                      faired, metrics, timings, splits, flips)
+                      faired, metrics, timings, splits, flips, improve_flips)
