@@ -325,6 +325,14 @@ def _shield_pass(xi, xvi, cand, sel, ns, o, ov, sloop, vis, stride, cos2, bv, st
         k = e
 
 
+@numba.njit(cache=True, inline="always")
+def _verdict_class(v):
+    """A key point's verdict as a class: 0 negligible (-1 or 0), 1 visible, 2 shielded, -1 none."""
+    if v == -2:
+        return -1
+    return max(v, 0)
+
+
 @numba.njit(cache=True, fastmath=FAST)
 def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
                 lc2, ki, kernel, prune2, shrink2, stride, cos2,
@@ -340,11 +348,12 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     shorten them, then shielding (_shield_pass) of the rest. stride = 1 is exact everywhere.
 
     Coherence across points (FieldParams.point_stride): a key point (krow[i] >= 0) records its
-    verdict per source in kv[krow[i]] (-1 no candidate, 0 pruned by q2, 1 visible, 2 shielded)
-    and q2 / L in kr; a point between two key points of its loop (rows n0[i], n1[i], points
-    p0[i], p1[i], weight wgt[i] of the second) takes a source's verdict from them when both
-    agree and the two key points subtend at most the coherence angle at the source, q2 / L
-    interpolated; only the other pairs are decided by the passes.
+    verdict per source in kv[krow[i]] (-2 excluded, -1 negligible by the candidate bound, 0 pruned
+    by q2, 1 visible, 2 shielded) and q2 / L in kr; a point between two key points of its loop
+    (rows n0[i], n1[i], points p0[i], p1[i], weight wgt[i] of the second) takes a source's verdict
+    from them when both agree (-1 and 0 count as one verdict: negligible) and the two key points
+    subtend at most the coherence angle at the source, q2 / L interpolated; only the other pairs
+    are decided by the passes.
     """
     m = o.shape[0]
     xi = x[i]
@@ -352,17 +361,20 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     gr = (g_origin, g_cell, g_dims, g_lattice)
     best = 1e300
     bj = -1
+    plain = xgrp[i] == NO_GROUP and xwin[i] < 0  # no source excluded: the loops below skip the tests
+    x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
     for j in range(m):  # pass 1: the nearest admissible source
-        if sgrp[j] == xgrp[i]:
-            continue
-        if xwin[i] >= 0 and sloop[j] == xloop[i]:
-            dp = abs(spos[j] - xpos[i])
-            dp = min(dp, slen[j] - dp)
-            if dp <= xwin[i]:
+        if not plain:
+            if sgrp[j] == xgrp[i]:
                 continue
-        r0 = o[j, 0] - x[i, 0]
-        r1 = o[j, 1] - x[i, 1]
-        r2 = o[j, 2] - x[i, 2]
+            if xwin[i] >= 0 and sloop[j] == xloop[i]:
+                dp = abs(spos[j] - xpos[i])
+                dp = min(dp, slen[j] - dp)
+                if dp <= xwin[i]:
+                    continue
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
         l2 = r0 * r0 + r1 * r1 + r2 * r2
         if l2 < best:
             best = l2
@@ -370,22 +382,31 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     # pass 2: the candidates, pruned relative to the nearest source:
     # (L * shrink)^2 - best > prune2, shrink = 1 / (1 + G(0)) in full mode with free points
     cand = np.empty(m, dtype=np.int64)
+    cl2 = np.empty(m)  # squared distances of the candidates
     nc = 0
+    row = krow[i]
+    if row >= 0:
+        for j in range(m):
+            kv[row, j] = -2  # excluded
     for j in range(m):
-        if sgrp[j] == xgrp[i]:
-            continue
-        if xwin[i] >= 0 and sloop[j] == xloop[i]:
-            dp = abs(spos[j] - xpos[i])
-            dp = min(dp, slen[j] - dp)
-            if dp <= xwin[i]:
+        if not plain:
+            if sgrp[j] == xgrp[i]:
                 continue
-        r0 = o[j, 0] - x[i, 0]
-        r1 = o[j, 1] - x[i, 1]
-        r2 = o[j, 2] - x[i, 2]
+            if xwin[i] >= 0 and sloop[j] == xloop[i]:
+                dp = abs(spos[j] - xpos[i])
+                dp = min(dp, slen[j] - dp)
+                if dp <= xwin[i]:
+                    continue
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
         l2 = r0 * r0 + r1 * r1 + r2 * r2
         if l2 * shrink2 - best > prune2 or l2 < 1e-300:
+            if row >= 0:
+                kv[row, j] = -1  # negligible whatever the free points
             continue
         cand[nc] = j
+        cl2[nc] = l2
         nc += 1
     vis = np.ones(nc, dtype=np.bool_)
     ratio = np.ones(nc)
@@ -397,12 +418,18 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     ns = 0
     ra, rb = n0[i], n1[i]
     if ra >= 0 and (use_fp or shield):  # coherence across points: the key points' verdicts
-        xa, xb = x[p0[i]], x[p1[i]]
+        # the key points Xa, Xb subtend at most the coherence angle theta at O when
+        # |Xa - Xb| <= sin(theta) min(|O - Xa|, |O - Xb|) (law of sines), which holds when
+        # |O - X| >= |Xa - Xb| (1 + sin theta) / sin theta (|O - Xa| >= |O - X| - |Xa - Xb|)
         w = wgt[i]
+        dab = np.sqrt(_d2(x[p0[i]], x[p1[i]]))
+        sin_t = np.sqrt(1.0 - cos2)
+        thr2 = (dab * (1.0 + sin_t) / sin_t) ** 2
         for c in range(nc):
             j = cand[c]
-            va = kv[ra, j]
-            if va >= 0 and va == kv[rb, j] and _narrow(o[j], xa, xb, cos2):
+            va = _verdict_class(kv[ra, j])
+            vb = _verdict_class(kv[rb, j])
+            if va >= 0 and va == vb and cl2[c] >= thr2:
                 vis[c] = va == 1
                 ratio[c] = kr[ra, j] * (1.0 - w) + kr[rb, j] * w
             else:
@@ -414,10 +441,7 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         ns = nc
     if use_fp:  # (4): q2 / L, and the pairs still negligible after the free points are dropped
         _q2_pass(xi, cand, sel, ns, o, sloop, vis, ratio, stride, cos2, gr, lim)
-    row = krow[i]
     if row >= 0:
-        for j in range(m):
-            kv[row, j] = -1
         for t in range(ns):
             if not vis[sel[t]]:
                 kv[row, cand[sel[t]]] = 0  # pruned by q2
@@ -663,6 +687,33 @@ class IndicatorField:
         self.prune = PRUNE_GAUSS * self.lc if self.kernel == 0 else np.inf
         self.shrink = 1.0 / (1.0 + gmax)
         self._prune2 = min(self.prune * self.prune, 1e300) if np.isfinite(self.prune) else 1e300
+        self._one: tuple | None = None  # full mode, one point: the kernel's arguments, made once
+
+    def _full_args(self) -> tuple:
+        """The arguments of _field_full after the points' own arrays (sources, parameters, BVH,
+        lattice), up to the coherence-across-points arrays."""
+        S, p, bvh = self.sources, self.params, self.bvh
+        barr = bvh.arrays() if bvh is not None else _EMPTY_BVH
+        garr = lattice_args(self.free) if self.free is not None else _EMPTY_GRID
+        return (S.points, S.vertex, S.tangent, S.outward, S.charge, S.group, S.loop, S.pos, S.loop_len,
+                self.lc * self.lc, float(p.ki), self.kernel, self._prune2, self.shrink ** 2, int(p.shield_stride),
+                float(np.cos(np.radians(p.coherence_deg)) ** 2), self.shield, *barr,
+                bvh.scale if bvh is not None else 1.0, self.free is not None, *garr)
+
+    def _full_one(self, x: Arr) -> Arr:
+        """Full-mode H (3, 3) at one point, no exclusions, no per-call set-up (a tracing step)."""
+        if self._one is None:
+            one = np.full(1, -1, dtype=np.int64)
+            pts = (one, np.full(1, NO_GROUP, dtype=np.int64), one, np.zeros(1, dtype=np.int64), one)
+            coh = (one, one, one, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1),
+                   np.zeros((0, len(self.sources)), dtype=np.int8), np.zeros((0, len(self.sources))),
+                   np.zeros(1, dtype=np.int64))
+            self._one = (pts, self._full_args(), coh)
+        pts, args, coh = self._one
+        H = np.zeros((1, 9))
+        _field_full_serial(np.asarray(x, dtype=np.float64).reshape(1, 3), *pts, *args, *coh, H,
+                           np.zeros(1, dtype=np.int64), np.zeros(1), np.zeros(1, dtype=np.int64))
+        return H.reshape(3, 3)
 
     def sample_one(self, x: Arr, tangent: Arr, hint: Arr) -> tuple[Arr, Arr, float]:
         """One point, no exclusions (a tracing step): (n, F = H n, |F|) with n from (16b)."""
@@ -674,8 +725,9 @@ class IndicatorField:
                                  np.asarray(hint, dtype=np.float64), S.points, S.tangent, S.outward, S.charge,
                                  self.lc * self.lc, float(self.params.ki), self.kernel, self._prune2)
             return n, f, float(np.sqrt(f @ f))
-        ev = self.evaluate(np.asarray(x, dtype=np.float64).reshape(1, 3))
-        n, f = _normal_one(ev.H[0], np.asarray(tangent, dtype=np.float64), np.asarray(hint, dtype=np.float64))
+        if len(self.sources) == 0:
+            return np.asarray(hint, dtype=np.float64), np.zeros(3), 0.0
+        n, f = _normal_one(self._full_one(x), np.asarray(tangent, dtype=np.float64), np.asarray(hint, dtype=np.float64))
         return n, f, float(np.sqrt(f @ f))
 
     @property
@@ -717,9 +769,7 @@ class IndicatorField:
                    S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2, H[sl], near[sl], dist[sl])
                 pairs += (sl.stop - sl.start) * len(S)
             else:
-                bvh = self.bvh
-                barr = bvh.arrays() if bvh is not None else _EMPTY_BVH
-                garr = lattice_args(self.free) if self.free is not None else _EMPTY_GRID
+                args = self._full_args()
                 nn = sl.stop - sl.start
                 cnt = np.zeros(nn, dtype=np.int64)
                 coh = key_points(xl[sl], xp[sl], int(p.point_stride) if (self.shield or self.free) else 1)
@@ -730,11 +780,8 @@ class IndicatorField:
                 for sub in (keys, rest):  # the key points first: the others read their verdicts
                     if len(sub) == 0:
                         continue
-                    fk(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
-                       S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
-                       self.shrink ** 2, int(p.shield_stride), float(np.cos(np.radians(p.coherence_deg)) ** 2),
-                       self.shield, *barr, bvh.scale if bvh is not None else 1.0,
-                       self.free is not None, *garr, krow if len(kv) else np.full(nn, -1, dtype=np.int64),
+                    fk(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], *args,
+                       krow if len(kv) else np.full(nn, -1, dtype=np.int64),
                        n0, n1, p0, p1, wgt, kv, kr, sub, H[sl], near[sl], dist[sl], cnt)
                 pairs += int(cnt.sum())
         return Evaluation(H.reshape(n, 3, 3), near, dist, pairs)
