@@ -35,6 +35,7 @@ Arr = NDArray[np.float64]
 PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: relative weight below which a Gaussian source is skipped
 NO_GROUP = -2  # a point that excludes no group of sources
 SERIAL_BELOW = 16  # fewer points than this: one thread (a tracing step)
+KEY_MEMORY = 32_000_000  # bytes of key-point verdicts per chunk in full mode (the chunk shrinks to fit)
 
 
 @dataclass(frozen=True, eq=False)
@@ -761,8 +762,11 @@ class IndicatorField:
         p = self.params
         if n == 0 or len(S) == 0:
             return Evaluation(H.reshape(n, 3, 3), near, dist, 0)
-        for a in range(0, n, self.chunk):
-            sl = slice(a, min(a + self.chunk, n))
+        chunk = self.chunk
+        if self.full:  # the key points' verdicts take 9 bytes per key point x source: at most KEY_MEMORY
+            chunk = min(chunk, max(256, KEY_MEMORY // (9 * len(S)) * int(p.point_stride)))
+        for a in range(0, n, chunk):
+            sl = slice(a, min(a + chunk, n))
             if not self.full:
                 lk: Any = _field_light if sl.stop - sl.start >= SERIAL_BELOW else _field_light_serial
                 lk(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
