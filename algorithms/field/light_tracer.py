@@ -1,4 +1,5 @@
-"""The simple tracer (spec/repair.md §5, 2004) fused into one numba loop for the light-mode BIAF.
+"""The tracers (spec/repair.md §5: simple, 2004; predictor-corrector, 2010 F4.1) fused into one
+numba loop for the light-mode BIAF.
 
 force_lines.trace runs the same steps in Python against any field of the protocol; with a
 light-mode IndicatorField each step there costs ~150 us of Python (sample -> evaluate -> normal
@@ -60,9 +61,34 @@ def _near_any(x, pts, radius):
 
 
 @numba.njit(cache=True)
-def simple_chunk(state, start, n_rec, max_steps, chunk, step, floor, o, tau, b, h, lc2, ki, kernel, prune2,
-                 tg, reach, avoid, out_x, out_n, out_f, out_t):
-    """Up to `chunk` steps of the simple tracer X_{k+1} = X_k + s F_k / |F_k| with n from (16b).
+def _corrected(x, p, n, step, dev, offs, o, tau, b, h, lc2, ki, kernel, prune2):
+    """2010 F4.1: the predictor P1' = X + s p, its normal N1' (16b), and among the points
+    P1' + (d o) N1' (o in offs) the one of maximum potential |H n| (the first one on ties; at
+    o = 0 the predictor's own tension), as force_lines.trace's Python loop does."""
+    pred = x + step * p
+    n1, f1 = _sample_light(pred, p, n, o, tau, b, h, lc2, ki, kernel, prune2)
+    zero = np.zeros(3)
+    best = -1.0
+    out = pred
+    for q in range(offs.shape[0]):
+        c = pred + (dev * offs[q]) * n1
+        if abs(offs[q]) < 1e-12:
+            psi = np.sqrt(f1[0] * f1[0] + f1[1] * f1[1] + f1[2] * f1[2])
+        else:
+            _, fc = _sample_light(c, p, zero, o, tau, b, h, lc2, ki, kernel, prune2)
+            psi = np.sqrt(fc[0] * fc[0] + fc[1] * fc[1] + fc[2] * fc[2])
+        if psi > best:
+            best = psi
+            out = c
+    return out
+
+
+@numba.njit(cache=True)
+def tracer_chunk(state, start, n_rec, max_steps, chunk, step, floor, o, tau, b, h, lc2, ki, kernel, prune2,
+                 tg, reach, avoid, out_x, out_n, out_f, out_t, pc, dev, offs):
+    """Up to `chunk` steps of the simple tracer X_{k+1} = X_k + s F_k / |F_k| (pc False) or of the
+    predictor-corrector (pc True: deviation dev, offsets offs along the predicted normal), with n
+    from (16b) at each new point.
 
     state (3, 3): rows x, F, n of the last recorded point (updated in place); n_rec: points
     recorded so far. Writes the new points, normals, forces, tensions into out_*; returns
@@ -78,7 +104,10 @@ def simple_chunk(state, start, n_rec, max_steps, chunk, step, floor, o, tau, b, 
             state[0], state[1], state[2] = x, f, n
             return k, CONTINUE, -1
         p = f / np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
-        x_new = x + step * p  # 2004: X_{k+1} = X_k + s F_k / |F_k|
+        if pc:  # 2010 F4.1
+            x_new = _corrected(x, p, n, step, dev, offs, o, tau, b, h, lc2, ki, kernel, prune2)
+        else:
+            x_new = x + step * p  # 2004: X_{k+1} = X_k + s F_k / |F_k|
         tang = x_new - x
         tang /= max(np.sqrt(tang[0] * tang[0] + tang[1] * tang[1] + tang[2] * tang[2]), 1e-300)
         sn, sf = _sample_light(x_new, tang, n, o, tau, b, h, lc2, ki, kernel, prune2)  # (16b)
