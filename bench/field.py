@@ -196,14 +196,13 @@ of {N_LON} sources at one point, single-threaded; CPU time, best of 3; the time 
 Predictor-corrector / simple cost per step: light {pc_ratio['light']:.1f}x, full {pc_ratio['full']:.1f}x,
 full without free points {pc_ratio['full, no free points']:.1f}x (2010 §6.4 reports 6-8x; ours evaluates the
 field 6 times per step: the predictor's normal, 4 extra potentials across it, the corrected point,
-against the simple tracer's one). In light mode both tracers run their steps fused in numba
+against the simple tracer's one). Both tracers run their steps fused in numba in both modes
 (field/light_tracer.py: field, normal (16b), predictor-corrector search, target and turned-back
-tests without returning to Python; the same lines as the Python loop, tests/test_force_lines.py),
-and a step's target and turned-back tests (brute force over the 2,400 targets and avoid points,
-about the cost of one field evaluation) are common to both tracers, hence less than 6x. Full
-mode steps in Python (one field evaluation costs about 0.1 ms there: shielding and q2 for one
-point, without the coherence across points), where the Python loop around the evaluations
-weighs on the simple tracer most.
+tests without returning to Python; the same lines as the Python loop, tests/test_force_lines.py).
+A step's target and turned-back tests (brute force over the 2,400 targets and avoid points, about
+the cost of one light-mode field evaluation) are common to both tracers, hence less than 6x in
+light mode; in full mode one field evaluation at a point of the gap costs about 0.1 ms
+(shielding and q2 for one point, without the coherence across points).
 
 For scale, the paper's Table 1 (a 500 MHz Pentium III, whole repair including darning):
 

@@ -701,18 +701,22 @@ class IndicatorField:
                 float(np.cos(np.radians(p.coherence_deg)) ** 2), self.shield, *barr,
                 bvh.scale if bvh is not None else 1.0, self.free is not None, *garr)
 
-    def _full_one(self, x: Arr) -> Arr:
-        """Full-mode H (3, 3) at one point, no exclusions, no per-call set-up (a tracing step)."""
+    def one_point_args(self) -> tuple:
+        """The arguments of _field_full_serial for one point with no exclusions (a tracing step),
+        up to the outputs; made once."""
         if self._one is None:
             one = np.full(1, -1, dtype=np.int64)
             pts = (one, np.full(1, NO_GROUP, dtype=np.int64), one, np.zeros(1, dtype=np.int64), one)
             coh = (one, one, one, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1),
                    np.zeros((0, len(self.sources)), dtype=np.int8), np.zeros((0, len(self.sources))),
                    np.zeros(1, dtype=np.int64))
-            self._one = (pts, self._full_args(), coh)
-        pts, args, coh = self._one
+            self._one = (*pts, *self._full_args(), *coh)
+        return self._one
+
+    def _full_one(self, x: Arr) -> Arr:
+        """Full-mode H (3, 3) at one point, no exclusions, no per-call set-up (a tracing step)."""
         H = np.zeros((1, 9))
-        _field_full_serial(np.asarray(x, dtype=np.float64).reshape(1, 3), *pts, *args, *coh, H,
+        _field_full_serial(np.asarray(x, dtype=np.float64).reshape(1, 3), *self.one_point_args(), H,
                            np.zeros(1, dtype=np.int64), np.zeros(1), np.zeros(1, dtype=np.int64))
         return H.reshape(3, 3)
 
