@@ -184,6 +184,9 @@ approximations, each a parameter (stride 1 and point_stride 1 decide every pair 
   q2/L (interpolated) from them when both agree and they subtend at most 10 degrees at the
   source; only the other pairs (the edges of the candidate range, where the keys disagree) are
   decided for the point itself.
+In this case no segment is shielded (a chord between the two rims stays inside the ellipsoid),
+so the coherence is exact without free points; the shielded and partly shielded cases are
+tested against every-pair shielding in tests/test_field_shielding.py (a partial wall, two caps).
 What remains is mostly the candidate loops themselves (the pairs within the free-point pruning
 radius, about 1,300 per point here against light mode's 570) and about 1 us per BVH segment test
 at the key points.
