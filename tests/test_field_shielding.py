@@ -194,3 +194,20 @@ def test_occluder_hint_changes_no_answer():
             hit, occ = segment_blocked_hint(x[i], o[i], -1, -1, *b.arrays(), b.scale, h, stack, work)
             assert hit == ref[i] and (occ >= 0) == hit
         hint = occ if hit else hint
+
+
+def test_coherence_across_points_skips_a_point_off_its_key_points_chord():
+    """Points labelled consecutive along a loop, but the middle one far from its two key points
+    (a hairpin) and hidden behind a wall from which they are not: it is decided by itself."""
+    disks = combine(disk((0, 0, 0)), disk((2.6, 0, 0)))
+    src = sources_from_frames([f for f in loop_frames(disks) if f.island == 1])
+    v = np.array([[1.2, -3, 0.5], [1.2, 3, 0.5], [1.2, 3, 2.5], [1.2, -3, 2.5]], dtype=float)
+    high_wall = Mesh(v, np.array([[0, 1, 2], [0, 2, 3]]))  # hides B from z ~ 1.5, not from z = 0
+    x = np.array([[1.0, 0.005, 0.0], [1.0, 0.0, 1.5], [1.0, -0.005, 0.0]])
+    loop, pos = np.zeros(3, dtype=np.int64), np.arange(3)
+    H = {}
+    for key, kw in (("exact", dict(shield_stride=1, point_stride=1)), ("coherent", dict(point_stride=2))):
+        f = IndicatorField(src, FieldParams(mode="full", lc=0.6, **kw), 0.6, bvh=mesh_bvh(combine(disks, high_wall)))
+        H[key] = f.evaluate(x, x_loop=loop, x_pos=pos).H
+    assert np.abs(H["exact"][0]).max() > 0.1 and np.abs(H["exact"][1]).max() == 0.0
+    np.testing.assert_allclose(H["coherent"], H["exact"], rtol=1e-9, atol=1e-12)

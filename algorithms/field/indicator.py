@@ -35,6 +35,7 @@ Arr = NDArray[np.float64]
 PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: relative weight below which a Gaussian source is skipped
 NO_GROUP = -2  # a point that excludes no group of sources
 SERIAL_BELOW = 16  # fewer points than this: one thread (a tracing step)
+CHORD_SLACK = 1.25  # coherence across points only for a point near the chord of its key points
 KEY_MEMORY = 32_000_000  # bytes of key-point verdicts per chunk in full mode (the chunk shrinks to fit)
 
 
@@ -418,14 +419,17 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     sel = np.empty(nc, dtype=np.int64)
     ns = 0
     ra, rb = n0[i], n1[i]
-    if ra >= 0 and (use_fp or shield):  # coherence across points: the key points' verdicts
-        # the key points Xa, Xb subtend at most the coherence angle theta at O when
+    dab = np.sqrt(_d2(x[p0[i]], x[p1[i]])) if ra >= 0 else 0.0
+    da, db = (np.sqrt(_d2(xi, x[p0[i]])), np.sqrt(_d2(xi, x[p1[i]]))) if ra >= 0 else (0.0, 0.0)
+    # coherence across points, when X lies near the chord of its two key points Xa, Xb (not at a
+    # sharp corner of the loop between them): |X - Xa| + |X - Xb| <= CHORD_SLACK |Xa - Xb|
+    if ra >= 0 and (use_fp or shield) and da + db <= CHORD_SLACK * dab:
+        # Xa, Xb subtend at most the coherence angle theta at a source O when
         # |Xa - Xb| <= sin(theta) min(|O - Xa|, |O - Xb|) (law of sines), which holds when
-        # |O - X| >= |Xa - Xb| (1 + sin theta) / sin theta (|O - Xa| >= |O - X| - |Xa - Xb|)
+        # |O - X| >= |Xa - Xb| (1 / sin(theta) + CHORD_SLACK), as |O - Xa| >= |O - X| - |X - Xa|
         w = wgt[i]
-        dab = np.sqrt(_d2(x[p0[i]], x[p1[i]]))
         sin_t = np.sqrt(1.0 - cos2)
-        thr2 = (dab * (1.0 + sin_t) / sin_t) ** 2
+        thr2 = (dab * (1.0 / sin_t + CHORD_SLACK)) ** 2
         for c in range(nc):
             j = cand[c]
             va = _verdict_class(kv[ra, j])
