@@ -182,8 +182,8 @@ approximations, each a parameter (stride 1 and point_stride 1 decide every pair 
   x_pos given, as attraction_index does), every 8th point is a key point decided as above; a
   point between two key points takes a source's verdict (negligible, visible or shielded) and
   q2/L (interpolated) from them when both agree and they subtend at most 10 degrees at the
-  source; only the other pairs (the edges of the candidate range, where the keys disagree) are
-  decided for the point itself.
+  source (and the point lies near their chord: no sharp corner between them); only the other
+  pairs (the edges of the candidate range, where the keys disagree) are decided for the point.
 In this case no segment is shielded (a chord between the two rims stays inside the ellipsoid),
 so the coherence is exact without free points; the shielded and partly shielded cases are
 tested against every-pair shielding in tests/test_field_shielding.py (a partial wall, two caps).
