@@ -141,19 +141,24 @@ class Refiner:
         return None
 
     def push_many(self, ts: list[int]) -> None:
-        """Queue new triangles; their missing chord / arc ratios in one surface call."""
+        """Queue new triangles; their missing chord / arc ratios in one surface call, the missing border
+        ratios of their curve edges in one root-finding call."""
         tri = self.tri
-        if self.p.chord_arc > 0:
-            cache = self.arc_cache
-            missing = set()
-            for t in ts:
-                a, b, c = tri.tv[t]
-                for x, y in ((a, b), (b, c), (c, a)):
-                    k = (x, y) if x < y else (y, x)
-                    if k not in cache:
-                        missing.add(k)
-            if missing:
-                self._arcs(sorted(missing))
+        cache = self.arc_cache
+        missing = set()
+        curve_missing = set()
+        for t in ts:
+            a, b, c = tri.tv[t]
+            for x, y in ((a, b), (b, c), (c, a)):
+                k = (x, y) if x < y else (y, x)
+                if self.p.chord_arc > 0 and k not in cache:
+                    missing.add(k)
+                if self.p.border_chord_arc > 0 and k in tri.seg and k not in self.border_cache:
+                    curve_missing.add(k)
+        if missing:
+            self._arcs(sorted(missing))
+        if curve_missing:
+            self._border_ratios(sorted(curve_missing))
         for t in ts:
             self.push(t)
 
@@ -186,21 +191,35 @@ class Refiner:
         """chord / arc of a curve segment, the arc through its midpoint on F = 0 (cached)."""
         key = (p, q) if p < q else (q, p)
         hit = self.border_cache.get(key)
-        if hit is not None:
-            return hit
+        if hit is None:
+            self._border_ratios([key])
+            hit = self.border_cache[key]
+        return hit
+
+    def _border_ratios(self, keys: list[tuple[int, int]]) -> None:
+        """border_ratio for several segments: their midpoints on F = 0 found together (one vectorised
+        root finding, Triangulation.midpoints_on_border), kept as the split targets."""
         tri = self.tri
-        sg = tri.seg.get(key)
-        r = 1.0
-        if sg is not None and sg[0] == CURVE:
-            target, ok = tri.midpoint_on_border(sg[1], sg[2], CURVE)
-            self.target_cache[key] = (target, ok)
-            if ok:
-                M = tri.surface(np.array([target[0]]), np.array([target[1]]))[0]
-                P, Q = np.array(tri.p3[p]), np.array(tri.p3[q])
-                arc = float(np.linalg.norm(M - P) + np.linalg.norm(Q - M))
-                r = float(np.linalg.norm(Q - P)) / arc if arc > 0 else 1.0
-        self.border_cache[key] = r
-        return r
+        curve = []
+        for key in keys:
+            sg = tri.seg.get(key)
+            if sg is not None and sg[0] == CURVE:
+                curve.append(key)
+            else:
+                self.border_cache[key] = 1.0
+        if not curve:
+            return
+        ends = [(tri.seg[k][1], tri.seg[k][2]) for k in curve]
+        targets, ok = tri.midpoints_on_border(ends)
+        M = tri.surface(targets[:, 0], targets[:, 1])
+        P = np.array([tri.p3[a] for a, _ in ends])
+        Q = np.array([tri.p3[b] for _, b in ends])
+        arc = np.linalg.norm(M - P, axis=1) + np.linalg.norm(Q - M, axis=1)
+        chord = np.linalg.norm(Q - P, axis=1)
+        ratio = np.where(ok & (arc > 0), chord / np.where(arc > 0, arc, 1.0), 1.0)
+        for k, tgt, good, r in zip(curve, targets.tolist(), ok.tolist(), ratio.tolist()):
+            self.target_cache[k] = ((tgt[0], tgt[1]), good)
+            self.border_cache[k] = r
 
     # ---- the 3D flip test (Fig. 3) ----------------------------------------------------------------------
     def deviation(self, t: int) -> float:
@@ -343,26 +362,34 @@ class Refiner:
         tw = tri.twin_segment(a, b, sg[0])
         if tw is not None:
             pairs.append(tw)
-        for x, y in pairs:
-            found = tri.find_edge(x, y)
-            if found is None:
-                continue
-            key2 = (x, y) if x < y else (y, x)
-            kind, fx, fy = tri.seg[key2]
-            hit = self.target_cache.pop(key2, None) if kind == CURVE else None
-            target = hit[0] if hit is not None else tri.midpoint_on_border(fx, fy, kind)[0]
-            ux, uy = tri.uv[fx], tri.uv[fy]
-            mid = (0.5 * (ux[0] + uy[0]), 0.5 * (ux[1] + uy[1]))
-            t, k = found
-            v = tri.add_vertex(mid)
-            tri.split_edge(t, k, v)
-            if kind == CURVE:
-                self.move_onto_curve(v, target)
-            self.seg_splits += 1
+        new = []
+        cb, tri.on_new_triangle = tri.on_new_triangle, None  # queue the fans once on the curve
+        try:
+            for x, y in pairs:
+                found = tri.find_edge(x, y)
+                if found is None:
+                    continue
+                key2 = (x, y) if x < y else (y, x)
+                kind, fx, fy = tri.seg[key2]
+                hit = self.target_cache.pop(key2, None) if kind == CURVE else None
+                target = hit[0] if hit is not None else tri.midpoint_on_border(fx, fy, kind)[0]
+                ux, uy = tri.uv[fx], tri.uv[fy]
+                mid = (0.5 * (ux[0] + uy[0]), 0.5 * (ux[1] + uy[1]))
+                t, k = found
+                v = tri.add_vertex(mid)
+                tri.split_edge(t, k, v)
+                if kind == CURVE:
+                    self.move_onto_curve(v, target, queue=False)
+                new.append(v)
+                self.seg_splits += 1
+        finally:
+            tri.on_new_triangle = cb
         tri.index_seams()
+        if new:
+            self.push_many(sorted({t for v in new for t in tri.fan(v)}))
         return True
 
-    def move_onto_curve(self, v: int, target: tuple[float, float]) -> bool:
+    def move_onto_curve(self, v: int, target: tuple[float, float], *, queue: bool = True) -> bool:
         """Move a border vertex from its chord midpoint onto F = 0 if its fan stays valid in (u, v)."""
         tri = self.tri
         fan = tri.fan(v)
@@ -387,7 +414,8 @@ class Refiner:
                     self.border_cache.pop(k2, None)
                     self.target_cache.pop(k2, None)
         tri._legalize(v, [(t, tri.tv[t].index(v)) for t in fan])
-        self.push_many(tri.fan(v))
+        if queue:
+            self.push_many(tri.fan(v))
         return True
 
     # ---- the main loop ----------------------------------------------------------------------------------------
