@@ -37,6 +37,7 @@ class HybridParams:
     cylinder: float = 1.5
     corner_angle: float = 60.0
     border_chord_arc: float = 0.99
+    max_deviation: float | None = None
     smooth: int = 4
     refine: bool = True
 
@@ -53,7 +54,7 @@ class HybridParams:
 
     def refine_params(self) -> RefineParams:
         return RefineParams(self.min_angle, self.max_edge, self.chord_arc, self.max_triangles, self.cylinder,
-                            self.border_chord_arc)
+                            self.border_chord_arc, self.max_deviation)
 
 
 @dataclass(frozen=True)
@@ -213,7 +214,8 @@ def mesh_hybrid(model: HybridModel, params: HybridParams | None = None) -> Hybri
         stats = ref.run()  # Stage III
     times["stage3_refine"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    moved = smooth_pass(tri, passes=p.smooth) if p.refine and p.smooth else 0
+    moved = smooth_pass(tri, passes=p.smooth, max_deviation=p.max_deviation,
+                                                       guard=p.min_angle + 0.25) if p.refine and p.smooth else 0
     times["smooth"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

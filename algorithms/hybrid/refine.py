@@ -29,7 +29,13 @@ class RefineParams:
     max_triangles: stop refining beyond this count; border_chord_arc: (choice) the same curvature
     criterion for the border curve F = 0 (chord against the two chords through its midpoint on
     the curve), split while below; cylinder: factor on the sampled deviation l of
-    the surface from a triangle's plane (the half-height of the in-circle cylinder, Fig. 3)."""
+    the surface from a triangle's plane (the half-height of the in-circle cylinder, Fig. 3);
+    max_deviation: (choice) the curvature criterion in absolute form, the chordal error: refine a
+    triangle while the surface over its edge midpoints or its centroid lies farther than this from
+    it (along its normal), and split a border segment while the border curve's midpoint lies farther
+    than this from the chord (None: off). For an arc of curvature κ the deviation of a chord of
+    length h is κh²/8, so this criterion sizes the mesh h ∝ 1/√κ, spreading the chordal error evenly
+    (the chord / arc ratio, 1 − κ²h²/24, sizes it h ∝ 1/κ)."""
 
     min_angle: float = 30.0
     max_edge: float | None = None
@@ -37,6 +43,7 @@ class RefineParams:
     max_triangles: int = 200_000
     cylinder: float = 1.5
     border_chord_arc: float = 0.99
+    max_deviation: float | None = None
 
     def __post_init__(self) -> None:
         if not 0 <= self.min_angle <= 34:
@@ -50,6 +57,8 @@ class RefineParams:
             raise ValueError(f"max_triangles: must be at least 1, got {self.max_triangles}")
         if not 0 <= self.border_chord_arc < 1:
             raise ValueError(f"border_chord_arc: must be in [0, 1), got {self.border_chord_arc}")
+        if self.max_deviation is not None and not self.max_deviation > 0:
+            raise ValueError(f"max_deviation: must be positive, got {self.max_deviation}")
         if not self.cylinder >= 1:
             raise ValueError(f"cylinder: must be at least 1, got {self.cylinder}")
 
@@ -82,6 +91,8 @@ class Refiner:
         self.border_cache: dict[tuple[int, int], float] = {}
         self.circle_cache: dict[tuple[int, int, int], tuple | None] = {}
         self.dev_cache: dict[tuple[int, int, int], float] = {}
+        self.chordal_cache: dict[tuple[int, int, int], float] = {}
+        self.border_dev_cache: dict[tuple[int, int], float] = {}
         self.fallbacks = 0
         a, b, c, d = tri.domain
         self.h = (1e-7 * (b - a), 1e-7 * (d - c))
@@ -115,6 +126,35 @@ class Refiner:
         for k, r in zip(keys, ratio.tolist()):
             self.arc_cache[k] = r
 
+    def _chordal(self, ts: list[int]) -> None:
+        """The chordal error of triangles (max_deviation): the distance, along the triangle's normal,
+        from its three edge midpoints and its centroid to the surface points over them (the same
+        barycentric points mapped to (u, v)); one vectorised surface call for all of them."""
+        tri = self.tri
+        keys = [tuple(tri.tv[t]) for t in ts]
+        p3, uv = tri.p3, tri.uv
+        A = np.array([[p3[a], p3[b], p3[c]] for a, b, c in keys])  # (K, 3, 3)
+        U = np.array([[uv[a], uv[b], uv[c]] for a, b, c in keys])  # (K, 3, 2)
+        S3 = np.concatenate([0.5 * (A + A[:, [1, 2, 0]]), A.mean(axis=1, keepdims=True)], axis=1)  # (K, 4, 3)
+        S2 = np.concatenate([0.5 * (U + U[:, [1, 2, 0]]), U.mean(axis=1, keepdims=True)], axis=1)
+        R = tri.surface(S2[..., 0], S2[..., 1])
+        e1, e2 = A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]
+        n = np.stack([e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1], e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2],
+                      e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]], axis=1)
+        ln = np.sqrt((n * n).sum(axis=1))
+        n /= np.where(ln > 0, ln, 1.0)[:, None]
+        dev = np.abs(((R - S3) * n[:, None, :]).sum(axis=2)).max(axis=1)
+        for k, d in zip(keys, dev.tolist()):
+            self.chordal_cache[k] = d
+
+    def chordal(self, t: int) -> float:
+        key = tuple(self.tri.tv[t])
+        d = self.chordal_cache.get(key)
+        if d is None:
+            self._chordal([t])
+            d = self.chordal_cache[key]
+        return d
+
     def badness(self, t: int) -> tuple[float, float] | None:
         """None for a good triangle, else its priority (smaller first)."""
         tri = self.tri
@@ -133,6 +173,8 @@ class Refiner:
             worst = min(cache[k] for k in keys)
             if worst < self.p.chord_arc:
                 return (0.0, -lmax)
+        if self.p.max_deviation is not None and self.chordal(t) > self.p.max_deviation:
+            return (0.0, -lmax)
         if ang < self.p.min_angle:
             if (a, b, c)[k] in self.corners:
                 self.skipped += 1
@@ -153,10 +195,15 @@ class Refiner:
                 k = (x, y) if x < y else (y, x)
                 if self.p.chord_arc > 0 and k not in cache:
                     missing.add(k)
-                if self.p.border_chord_arc > 0 and k in tri.seg and k not in self.border_cache:
+                if (self.p.border_chord_arc > 0 or self.p.max_deviation is not None) and k in tri.seg \
+                        and k not in self.border_cache:
                     curve_missing.add(k)
         if missing:
             self._arcs(sorted(missing))
+        if self.p.max_deviation is not None:
+            todo = [t for t in ts if tri.alive[t] and tuple(tri.tv[t]) not in self.chordal_cache]
+            if todo:
+                self._chordal(todo)
         if curve_missing:
             self._border_ratios(sorted(curve_missing))
         for t in ts:
@@ -185,6 +232,8 @@ class Refiner:
             return True
         if self.p.chord_arc > 0 and self.chord_arc(p, q) < self.p.chord_arc:
             return True
+        if self.p.max_deviation is not None and self.border_deviation(p, q) > self.p.max_deviation:
+            return True
         return self.p.border_chord_arc > 0 and self.border_ratio(p, q) < self.p.border_chord_arc
 
     def border_ratio(self, p: int, q: int) -> float:
@@ -195,6 +244,13 @@ class Refiner:
             self._border_ratios([key])
             hit = self.border_cache[key]
         return hit
+
+    def border_deviation(self, p: int, q: int) -> float:
+        """The distance of a curve segment's midpoint on F = 0 from the middle of its chord (3D)."""
+        key = (p, q) if p < q else (q, p)
+        if key not in self.border_cache:
+            self._border_ratios([key])
+        return self.border_dev_cache.get(key, 0.0)
 
     def _border_ratios(self, keys: list[tuple[int, int]]) -> None:
         """border_ratio for several segments: their midpoints on F = 0 found together (one vectorised
@@ -217,9 +273,11 @@ class Refiner:
         arc = np.linalg.norm(M - P, axis=1) + np.linalg.norm(Q - M, axis=1)
         chord = np.linalg.norm(Q - P, axis=1)
         ratio = np.where(ok & (arc > 0), chord / np.where(arc > 0, arc, 1.0), 1.0)
-        for k, tgt, good, r in zip(curve, targets.tolist(), ok.tolist(), ratio.tolist()):
+        dev = np.where(ok, np.linalg.norm(M - 0.5 * (P + Q), axis=1), 0.0)
+        for k, tgt, good, r, e in zip(curve, targets.tolist(), ok.tolist(), ratio.tolist(), dev.tolist()):
             self.target_cache[k] = ((tgt[0], tgt[1]), good)
             self.border_cache[k] = r
+            self.border_dev_cache[k] = e
 
     # ---- the 3D flip test (Fig. 3) ----------------------------------------------------------------------
     def deviation(self, t: int) -> float:
@@ -327,27 +385,35 @@ class Refiner:
         ua, ub, uc = tri.uv[a], tri.uv[b], tri.uv[c]
         u = la * ua[0] + lb * ub[0] + lc * uc[0]
         v = la * ua[1] + lb * ub[1] + lc * uc[1]
-        e = np.array(E3)
         hu, hv = self.h
+        box = self.box
+        tol_u, tol_v = 1e-9 * (box[1] - box[0]), 1e-9 * (box[3] - box[2])
+        ex, ey, ez = E3
         R = None
-        for _ in range(6):  # Gauss-Newton on |R(u, v) − E3|²  (7)
-            u = min(max(u, self.box[0]), self.box[1])
-            v = min(max(v, self.box[2]), self.box[3])
-            q = tri.surface(np.array([u, u + hu, u]), np.array([v, v, v + hv]))
+        for _ in range(4):  # Gauss-Newton on |R(u, v) − E3|²  (7); one surface call per step
+            u = min(max(u, box[0]), box[1])
+            v = min(max(v, box[2]), box[3])
+            q = tri.surface(np.array([u, u + hu, u]), np.array([v, v, v + hv])).tolist()
             R = q[0]
-            J = np.stack([(q[1] - R) / hu, (q[2] - R) / hv], axis=1)
-            r = R - e
-            JtJ = J.T @ J
-            det = JtJ[0, 0] * JtJ[1, 1] - JtJ[0, 1] * JtJ[1, 0]
+            ju = ((q[1][0] - R[0]) / hu, (q[1][1] - R[1]) / hu, (q[1][2] - R[2]) / hu)
+            jv = ((q[2][0] - R[0]) / hv, (q[2][1] - R[1]) / hv, (q[2][2] - R[2]) / hv)
+            r0, r1, r2 = R[0] - ex, R[1] - ey, R[2] - ez
+            a11 = ju[0] * ju[0] + ju[1] * ju[1] + ju[2] * ju[2]
+            a12 = ju[0] * jv[0] + ju[1] * jv[1] + ju[2] * jv[2]
+            a22 = jv[0] * jv[0] + jv[1] * jv[1] + jv[2] * jv[2]
+            det = a11 * a22 - a12 * a12
             if det <= 0:
                 break
-            g = J.T @ r
-            du = -(JtJ[1, 1] * g[0] - JtJ[0, 1] * g[1]) / det
-            dv = -(-JtJ[1, 0] * g[0] + JtJ[0, 0] * g[1]) / det
+            g1 = ju[0] * r0 + ju[1] * r1 + ju[2] * r2
+            g2 = jv[0] * r0 + jv[1] * r1 + jv[2] * r2
+            du = -(a22 * g1 - a12 * g2) / det
+            dv = -(a11 * g2 - a12 * g1) / det
+            if abs(du) < tol_u and abs(dv) < tol_v:  # converged: R is the surface point at (u, v)
+                return u, v, (R[0], R[1], R[2])
             u += du
             v += dv
-            if abs(du) < 1e-11 * (self.box[1] - self.box[0]) and abs(dv) < 1e-11 * (self.box[3] - self.box[2]):
-                break
+        u = min(max(u, box[0]), box[1])
+        v = min(max(v, box[2]), box[3])
         q = tri.surface(np.array([u]), np.array([v]))[0]
         return u, v, (float(q[0]), float(q[1]), float(q[2]))
 
@@ -384,7 +450,8 @@ class Refiner:
                 self.seg_splits += 1
         finally:
             tri.on_new_triangle = cb
-        tri.index_seams()
+        if sg[0] != CURVE:  # the seam index holds the sides of P only
+            tri.index_seams()
         if new:
             self.push_many(sorted({t for v in new for t in tri.fan(v)}))
         return True
@@ -407,11 +474,13 @@ class Refiner:
             tv = tri.tv[t]
             self.dev_cache.pop((tv[0], tv[1], tv[2]), None)
             self.circle_cache.pop((tv[0], tv[1], tv[2]), None)
+            self.chordal_cache.pop((tv[0], tv[1], tv[2]), None)
             for w in tv:
                 if w != v:
                     k2 = (v, w) if v < w else (w, v)
                     self.arc_cache.pop(k2, None)
                     self.border_cache.pop(k2, None)
+                    self.border_dev_cache.pop(k2, None)
                     self.target_cache.pop(k2, None)
         tri._legalize(v, [(t, tri.tv[t].index(v)) for t in fan])
         if queue:
