@@ -19,6 +19,7 @@ import numpy as np
 
 from .border import CURVE
 from .cdt import BLOCKED, Triangulation
+from .chordal import chordal_errors
 from .incircle import circumcentre_3d, circumcircle_2d, local_frame, min_angle_3d, orient, to_local
 
 
@@ -32,10 +33,10 @@ class RefineParams:
     the surface from a triangle's plane (the half-height of the in-circle cylinder, Fig. 3);
     max_deviation: (choice) the curvature criterion in absolute form, the chordal error: refine a
     triangle while the surface over its edge midpoints or its centroid lies farther than this from
-    it (along its normal), and split a border segment while the border curve's midpoint lies farther
-    than this from the chord (None: off). For an arc of curvature κ the deviation of a chord of
-    length h is κh²/8, so this criterion sizes the mesh h ∝ 1/√κ, spreading the chordal error evenly
-    (the chord / arc ratio, 1 − κ²h²/24, sizes it h ∝ 1/κ)."""
+    it (chordal.py: the distance to the surface near them), and split a border segment while the
+    border curve's midpoint lies farther than this from the chord (None: off). For an arc of
+    curvature κ a chord of length h deviates by κh²/8, so this sizes the mesh h ∝ 1/√κ and spreads
+    the chordal error evenly (the chord / arc ratio, 1 − κ²h²/24, sizes it h ∝ 1/κ)."""
 
     min_angle: float = 30.0
     max_edge: float | None = None
@@ -127,24 +128,13 @@ class Refiner:
             self.arc_cache[k] = r
 
     def _chordal(self, ts: list[int]) -> None:
-        """The chordal error of triangles (max_deviation): the distance, along the triangle's normal,
-        from its three edge midpoints and its centroid to the surface points over them (the same
-        barycentric points mapped to (u, v)); one vectorised surface call for all of them."""
+        """The chordal error of triangles (max_deviation, chordal.py), all of them in two surface calls."""
         tri = self.tri
         keys = [tuple(tri.tv[t]) for t in ts]
         p3, uv = tri.p3, tri.uv
-        A = np.array([[p3[a], p3[b], p3[c]] for a, b, c in keys])  # (K, 3, 3)
-        U = np.array([[uv[a], uv[b], uv[c]] for a, b, c in keys])  # (K, 3, 2)
-        S3 = np.concatenate([0.5 * (A + A[:, [1, 2, 0]]), A.mean(axis=1, keepdims=True)], axis=1)  # (K, 4, 3)
-        S2 = np.concatenate([0.5 * (U + U[:, [1, 2, 0]]), U.mean(axis=1, keepdims=True)], axis=1)
-        R = tri.surface(S2[..., 0], S2[..., 1])
-        e1, e2 = A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]
-        n = np.stack([e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1], e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2],
-                      e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]], axis=1)
-        ln = np.sqrt((n * n).sum(axis=1))
-        n /= np.where(ln > 0, ln, 1.0)[:, None]
-        dev = np.abs(((R - S3) * n[:, None, :]).sum(axis=2)).max(axis=1)
-        for k, d in zip(keys, dev.tolist()):
+        T3 = np.array([[p3[a], p3[b], p3[c]] for a, b, c in keys])
+        T2 = np.array([[uv[a], uv[b], uv[c]] for a, b, c in keys])
+        for k, d in zip(keys, chordal_errors(tri.surface, T3, T2).tolist()):
             self.chordal_cache[k] = d
 
     def chordal(self, t: int) -> float:

@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .cdt import Triangulation
+from .chordal import chordal_errors
 
 
 def _min_angles(T: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -32,22 +33,6 @@ def _min_angles(T: NDArray[np.float64]) -> NDArray[np.float64]:
         ang = np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b)))
         out = np.minimum(out, ang)
     return out
-
-
-_SAMPLES = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [1 / 3, 1 / 3, 1 / 3]])
-
-
-def chordal_errors(surface, T3: NDArray[np.float64], T2: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(K,) chordal error of triangles (K, 3, 3) with parameters (K, 3, 2): the largest distance, along
-    the triangle's normal, from its edge midpoints and centroid to the surface over them (the same
-    measure as the refinement's max_deviation criterion)."""
-    S3 = np.einsum("sj,kjd->ksd", _SAMPLES, T3)
-    S2 = np.einsum("sj,kjd->ksd", _SAMPLES, T2)
-    R = surface(S2[..., 0], S2[..., 1])
-    n = np.cross(T3[:, 1] - T3[:, 0], T3[:, 2] - T3[:, 0])
-    ln = np.linalg.norm(n, axis=1, keepdims=True)
-    n = n / np.where(ln > 0, ln, 1.0)
-    return np.abs(np.einsum("ksd,kd->ks", R - S3, n)).max(axis=1)
 
 
 def _colours(n: int, edges: NDArray[np.int64], movable: NDArray[np.bool_]) -> list[NDArray[np.int64]]:
@@ -140,14 +125,17 @@ def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None =
             # the fan's smallest angle may not fall below the bound (nor below its old value if it was
             # under it already), and its mean minimum angle must improve
             accept = (new_min >= np.minimum(old_min, guard)) & (new_mean > old_mean)
-            if max_deviation is not None:
-                dn = chordal_errors(surf, T3n, T2n)
-                do = chordal_errors(surf, T3o, T2o)
+            if max_deviation is not None and accept.any():
+                # the fans' chordal errors after the move; before it only where they exceed the tolerance
+                fsel = accept[pos]
                 worst_new = np.zeros(len(vs))
-                worst_old = np.zeros(len(vs))
-                np.maximum.at(worst_new, pos, dn)
-                np.maximum.at(worst_old, pos, do)
-                accept &= worst_new <= np.maximum(max_deviation, worst_old)
+                np.maximum.at(worst_new, pos[fsel], chordal_errors(surf, T3n[fsel], T2n[fsel]))
+                over = accept & (worst_new > max_deviation)
+                if over.any():
+                    fo = over[pos]
+                    worst_old = np.zeros(len(vs))
+                    np.maximum.at(worst_old, pos[fo], chordal_errors(surf, T3o[fo], T2o[fo]))
+                    accept &= ~over | (worst_new <= worst_old)
             mv = vs[accept]
             uv[mv] = x[accept]
             p3[mv] = R[accept]
