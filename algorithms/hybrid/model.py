@@ -37,16 +37,18 @@ class HybridModel:
         """
         return self.F(self.surface(u, v))
 
-    def bisect(self, p: ArrayLike, q: ArrayLike, *, samples: int = 128, rounds: int = 3,
+    def bisect(self, p: ArrayLike, q: ArrayLike, *, samples: int | None = None, rounds: int | None = None,
                wp: ArrayLike | None = None, wq: ArrayLike | None = None) -> NDArray[np.float64]:
         """Zero crossings of W on the parameter segments p→q (arrays (K, 2)), where W changes sign.
 
         Root finding in the segment parameter t, vectorised over K and over the samples: each round
         evaluates W at `samples` - 1 interior points of every bracket (one surface and one F call for
         all of them: for a few segments the cost of a call barely depends on its length) and keeps the
-        first sub-interval with a sign change; after `rounds` rounds the bracket is 128⁻³ ≈ 5e-7 of the
-        segment, then Illinois regula falsi inside it shrinks the bracket below 1e-14 (the border accuracy
-        of §2, checked in the mesher's report). wp, wq: W at p and q if the caller has them. Deterministic.
+        first sub-interval with a sign change. samples defaults to 128 for a few segments, fewer for
+        many (about 2048 points a call: then the cost is in the points, not in the calls), and rounds
+        to what brings the bracket below 1e-6 of the segment (128⁻³ ≈ 5e-7); then Illinois regula falsi
+        inside it shrinks the bracket below 1e-14 (the border accuracy of §2, checked in the mesher's
+        report). wp, wq: W at p and q if the caller has them. Deterministic.
         """
         p = np.asarray(p, dtype=np.float64).reshape(-1, 2)
         q = np.asarray(q, dtype=np.float64).reshape(-1, 2)
@@ -57,6 +59,10 @@ class HybridModel:
         lo, hi = np.zeros(n), np.ones(n)
         flo = self.W(p[:, 0], p[:, 1]) if wp is None else np.asarray(wp, dtype=np.float64).copy()
         fhi = self.W(q[:, 0], q[:, 1]) if wq is None else np.asarray(wq, dtype=np.float64).copy()
+        if samples is None:
+            samples = int(np.clip(2048 // n, 8, 128))
+        if rounds is None:
+            rounds = int(np.ceil(6.0 / np.log10(samples)))
         s = np.linspace(0.0, 1.0, samples + 1)[1:-1]  # interior fractions of the bracket
         for _ in range(rounds):
             t = lo[:, None] + (hi - lo)[:, None] * s[None, :]  # (K, S-1)

@@ -95,6 +95,7 @@ class Refiner:
         self.chordal_cache: dict[tuple[int, int, int], float] = {}
         self.border_dev_cache: dict[tuple[int, int], float] = {}
         self.fallbacks = 0
+        self.pending: list[int] = []
         a, b, c, d = tri.domain
         self.h = (1e-7 * (b - a), 1e-7 * (d - c))
         self.box = (a - (b - a), b + (b - a), c - (d - c), d + (d - c))
@@ -443,7 +444,7 @@ class Refiner:
         if sg[0] != CURVE:  # the seam index holds the sides of P only
             tri.index_seams()
         if new:
-            self.push_many(sorted({t for v in new for t in tri.fan(v)}))
+            self.pending.extend(t for v in new for t in tri.fan(v))
         return True
 
     def move_onto_curve(self, v: int, target: tuple[float, float], *, queue: bool = True) -> bool:
@@ -474,36 +475,110 @@ class Refiner:
                     self.target_cache.pop(k2, None)
         tri._legalize(v, [(t, tri.tv[t].index(v)) for t in fan])
         if queue:
-            self.push_many(tri.fan(v))
+            self.pending.extend(tri.fan(v))
         return True
 
     # ---- the main loop ----------------------------------------------------------------------------------------
     def run(self) -> RefineStats:
+        """Refinement in rounds (the order of insertions is free in Ruppert's algorithm): the triangles
+        made since the last round are assessed together (chord / arc, chordal error and border ratios:
+        a few vectorised surface calls), the encroached or bad border segments are split, then every bad
+        triangle known at the start of the round is refined in priority order (skipping those an earlier
+        insertion removed), its surface circumcentre found with the others in one vectorised
+        Gauss-Newton (7). The insertions themselves are sequential: each changes what the next one sees."""
         tri = self.tri
         tri.flip_test = self.flip_test
-        tri.on_new_triangle = self.push_many
-        self.push_many([t for t in range(len(tri.tv)) if tri.alive[t]])
+        self.pending = [t for t in range(len(tri.tv)) if tri.alive[t]]
+        tri.on_new_triangle = self._collect
         hit = False
-        # sequential by nature: every insertion changes the triangles the next one sees
-        while self.seg_queue or self.heap or self._retry_off_curve():
+        while True:
             if tri.n_alive >= self.p.max_triangles:
                 hit = True
                 break
+            if self.pending:
+                ts = list(dict.fromkeys(self.pending))
+                self.pending = []
+                self.push_many([t for t in ts if tri.alive[t]])
             if self.seg_queue:
-                p, q = self.seg_queue.pop()
-                if tri.is_constrained(p, q) and tri.find_edge(p, q) is not None:
-                    t, k = tri.find_edge(p, q)
-                    if self.segment_bad(p, q, tri.tv[t][k]):
+                segs, self.seg_queue = self.seg_queue, []
+                for p, q in reversed(segs):
+                    if tri.n_alive >= self.p.max_triangles:
+                        break
+                    found = tri.find_edge(p, q) if tri.is_constrained(p, q) else None
+                    if found is not None and self.segment_bad(p, q, tri.tv[found[0]][found[1]]):
                         self.split_segment(p, q)
                 continue
-            _, _, _, t, verts = heapq.heappop(self.heap)
-            if not tri.alive[t] or tuple(tri.tv[t]) != verts:
-                continue
-            if self.badness(t) is None:
-                continue
-            self.refine_triangle(t)
+            if not self.heap:
+                if self.pending or self._retry_off_curve():
+                    continue
+                break
+            items = [heapq.heappop(self.heap) for _ in range(len(self.heap))]
+            todo = [(t, verts) for *_, t, verts in items if tri.alive[t] and tuple(tri.tv[t]) == verts]
+            sps = self._surface_points([t for t, _ in todo])
+            for (t, verts), sp in zip(todo, sps):
+                if tri.n_alive >= self.p.max_triangles:
+                    break
+                if not tri.alive[t] or tuple(tri.tv[t]) != verts or self.badness(t) is None:
+                    continue
+                self.refine_triangle(t, sp)
         tri.on_new_triangle = None
         return RefineStats(self.inserted, self.seg_splits, self.skipped, hit, len(tri.off_curve))
+
+    def _collect(self, ts: list[int]) -> None:
+        self.pending.extend(ts)
+
+    def _surface_points(self, ts: list[int]) -> list[tuple[float, float, tuple] | None]:
+        """surface_point for many triangles at once: the 3D circumcentres E3, the affine guesses in (u, v),
+        then Gauss-Newton on |R(u, v) − E3|² (7) vectorised (one surface call per step for all)."""
+        tri = self.tri
+        out: list[tuple[float, float, tuple] | None] = [None] * len(ts)
+        rows, E, G = [], [], []
+        for i, t in enumerate(ts):
+            a, b, c = tri.tv[t]
+            A, B, C = tri.p3[a], tri.p3[b], tri.p3[c]
+            fr = local_frame(A, B, C)
+            if fr is None:
+                continue
+            bx = to_local(fr, A, B)[0]
+            cl = to_local(fr, A, C)
+            ex, ey, _ = circumcircle_2d(bx, cl[0], cl[1])
+            x, y, _z = fr
+            E3 = (A[0] + x[0] * ex + y[0] * ey, A[1] + x[1] * ex + y[1] * ey, A[2] + x[2] * ex + y[2] * ey)
+            lc = ey / cl[1]  # barycentric coordinates of E3′ in A′B′C′, carried over to (u, v)
+            lb = (ex - lc * cl[0]) / bx
+            la = 1.0 - lb - lc
+            ua, ub, uc = tri.uv[a], tri.uv[b], tri.uv[c]
+            rows.append(i)
+            E.append(E3)
+            G.append((la * ua[0] + lb * ub[0] + lc * uc[0], la * ua[1] + lb * ub[1] + lc * uc[1]))
+        if not rows:
+            return out
+        E3s = np.array(E)
+        uv = np.array(G)
+        box = self.box
+        lo, hi = np.array([box[0], box[2]]), np.array([box[1], box[3]])
+        hu, hv = self.h
+        k = len(uv)
+        for _ in range(4):
+            uv = np.clip(uv, lo, hi)
+            q = tri.surface(np.r_[uv[:, 0], uv[:, 0] + hu, uv[:, 0]], np.r_[uv[:, 1], uv[:, 1], uv[:, 1] + hv])
+            R = q[:k]
+            ju, jv = (q[k:2 * k] - R) / hu, (q[2 * k:] - R) / hv
+            r = R - E3s
+            a11, a12, a22 = (ju * ju).sum(1), (ju * jv).sum(1), (jv * jv).sum(1)
+            g1, g2 = (ju * r).sum(1), (jv * r).sum(1)
+            det = a11 * a22 - a12 * a12
+            ok = det > 0
+            det = np.where(ok, det, 1.0)
+            step = np.where(ok[:, None], -np.stack([(a22 * g1 - a12 * g2) / det, (a11 * g2 - a12 * g1) / det], 1), 0.0)
+            uv = uv + step
+            if (np.abs(step) <= 1e-9 * (hi - lo)).all():
+                break
+        uv = np.clip(uv, lo, hi)
+        P = tri.surface(uv[:, 0], uv[:, 1])
+        for i, (u, v), (x, y, z) in zip(rows, uv.tolist(), P.tolist()):
+            out[i] = (u, v, (x, y, z))
+        return out
 
     def _retry_off_curve(self) -> bool:
         """Once the queues are empty: move border vertices still on their chords onto F = 0."""
@@ -513,11 +588,12 @@ class Refiner:
                 moved = True
         return moved
 
-    def refine_triangle(self, t: int) -> None:
+    def refine_triangle(self, t: int, sp: tuple[float, float, tuple] | None = None) -> None:
         tri = self.tri
         a, b, c = tri.tv[t]
-        E3 = circumcentre_3d(tri.p3[a], tri.p3[b], tri.p3[c])
-        sp = self.surface_point(t, E3) if E3 is not None else None
+        if sp is None:
+            E3 = circumcentre_3d(tri.p3[a], tri.p3[b], tri.p3[c])
+            sp = self.surface_point(t, E3) if E3 is not None else None
         if sp is not None:
             u, v, P3 = sp
             t2, status, k = tri.locate((u, v), t, stop_at_segments=True)
@@ -571,7 +647,7 @@ class Refiner:
 
     def _requeue(self, t: int) -> None:
         if self.tri.alive[t]:
-            self.push(t)
+            self.pending.append(t)
 
     def encroached_by(self, t0: int, P: tuple[float, float, float]) -> list[tuple[int, int]]:
         tri = self.tri
