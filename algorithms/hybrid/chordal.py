@@ -16,8 +16,11 @@ from numpy.typing import NDArray
 
 def chordal_errors(surface, T3: NDArray[np.float64], T2: NDArray[np.float64]) -> NDArray[np.float64]:
     """(K,) chordal error of triangles T3 (K, 3, 3) whose vertices have parameters T2 (K, 3, 2)."""
-    if not len(T3):
-        return np.zeros(0)
+    return sample_errors(surface, T3, T2).max(axis=1) if len(T3) else np.zeros(0)
+
+
+def sample_errors(surface, T3: NDArray[np.float64], T2: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(K, 4) the distances at the midpoints of edges (0, 1), (1, 2), (2, 0) and at the centroid."""
     S3 = np.concatenate([0.5 * (T3 + T3[:, [1, 2, 0]]), T3.mean(axis=1, keepdims=True)], axis=1)  # (K, 4, 3)
     S2 = np.concatenate([0.5 * (T2 + T2[:, [1, 2, 0]]), T2.mean(axis=1, keepdims=True)], axis=1)
     a, b, c, d = surface.domain
@@ -36,4 +39,4 @@ def chordal_errors(surface, T3: NDArray[np.float64], T2: NDArray[np.float64]) ->
     dv = np.where(ok, (a11 * g2 - a12 * g1) / det, 0.0)
     R2 = surface(np.clip(u + du, a, b), np.clip(v + dv, c, d))
     dist = np.minimum(np.sqrt(((R2 - S3) ** 2).sum(-1)), np.sqrt((r * r).sum(-1)))
-    return dist.max(axis=1)
+    return dist
