@@ -25,14 +25,15 @@ from .chordal import chordal_errors
 
 
 def _min_angles(T: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(K, 3, 3) triangles → (K,) smallest angle in degrees."""
-    out = np.full(len(T), np.inf)
-    for k in range(3):
-        a = T[:, (k + 1) % 3] - T[:, k]
-        b = T[:, (k + 2) % 3] - T[:, k]
-        ang = np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), np.einsum("ij,ij->i", a, b)))
-        out = np.minimum(out, ang)
-    return out
+    """(K, 3, 3) triangles → (K,) smallest angle in degrees: the angle opposite the shortest edge, by
+    the law of cosines (one arccos per triangle)."""
+    e = T[:, [1, 2, 0]] - T  # edges (0→1, 1→2, 2→0)
+    L2 = np.einsum("kij,kij->ki", e, e)
+    L2.sort(axis=1)
+    a2, b2, c2 = L2[:, 0], L2[:, 1], L2[:, 2]
+    den = 2.0 * np.sqrt(b2 * c2)
+    cos = np.where(den > 0, (b2 + c2 - a2) / np.where(den > 0, den, 1.0), 1.0)
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
 def _colours(n: int, edges: NDArray[np.int64], movable: NDArray[np.bool_]) -> list[NDArray[np.int64]]:
