@@ -201,7 +201,7 @@ def main(argv=None) -> int:
                 "edge midpoints to the exact surface (closest point by Gauss-Newton) over the model size, the same "
                 "code for both meshers; boundary loops of the output (the interstage must have 12: 10 openings, as "
                 "the three through-hatches cut both sides, and the 2 rims, the seam welded). Times are wall-clock "
-                "on a shared 2-core machine; load average "
+                "on a shared 2-core machine, the better of two runs; load average "
                 f"{' '.join(load0)} at the start, {' '.join(load1)} at the last row: compare the ratios, measured "
                 "in the same run, rather than the absolute times.\n\n" + table(headers, rows)
                 + "\n\nRatios ours / Gmsh at the same target (chordal max: below 0.5 is the issue's target; time: "
@@ -222,6 +222,7 @@ def main(argv=None) -> int:
                 return (r, len(r.faces), time.perf_counter() - t0, eps)
 
             r, n, dt, eps = tune(ours, target, 2.0 * size / target, -1.0)
+            dt = min(dt, ours(eps)[2])  # the better of two timings: the machine is shared
             st = r.stats_after
             cmax, cmean = chordal(surf, r.points, r.faces)
             rows.append([name, target, f"bridgefield (max_deviation {eps / size:.3g} × size)", n, st.min, st.p01,
@@ -238,6 +239,7 @@ def main(argv=None) -> int:
                     return ((X, F), len(F), t, hh)
 
                 (X, F), n2, dt2, h = tune(peer, n, h0, -2.0)
+                dt2 = min(dt2, peer(h)[2])
                 h0 = h
                 st2 = angle_stats(min_angles(X, F))
                 cmax2, cmean2 = chordal(surf, X, F)
