@@ -1,5 +1,6 @@
 """The curvature criterion in chordal form (max_deviation), the root finder, and the size control."""
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -101,3 +102,18 @@ def test_root_finder_is_exact_on_a_circle_and_at_a_kink():
     m2 = HybridModel("kink", flat, lambda x, y, z: r_and(0.3 - x, 0.3 - x))
     x2 = m2.bisect(np.array([[0.0, 0.1]]), np.array([[0.9, 0.1]]))
     assert abs(x2[0, 0] - 0.3) < 1e-13
+
+
+def test_border_tolerance_alone_changes_only_the_border_resolution():
+    spec, p = chordal_params("interstage", 4e-4)
+    tied = mesh_hybrid(spec.model, p)
+    loose = mesh_hybrid(spec.model, replace(p, border_deviation=math.inf))
+    # the border curve is no longer cut to the chordal tolerance: fewer border vertices and triangles,
+    # the surface still within it and every opening still there
+    assert len(loose.border_vertices) < 0.8 * len(tied.border_vertices)
+    assert len(loose.faces) < len(tied.faces)
+    for r in (tied, loose):
+        assert r.stats_excluding_corners.min >= 30
+        assert len(boundary_loops(r.mesh.faces)) == 12
+        T, U = r.points[r.faces], r.uv[r.faces]
+        assert chordal_errors(spec.model.surface, T, U).max() <= p.max_deviation * (1 + 1e-9)

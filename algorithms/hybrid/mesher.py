@@ -40,6 +40,7 @@ class HybridParams:
     corner_angle: float = 60.0
     border_chord_arc: float = 0.99
     max_deviation: float | None = None
+    border_deviation: float | None = None
     smooth: int = 4
     refine: bool = True
 
@@ -56,7 +57,7 @@ class HybridParams:
 
     def refine_params(self) -> RefineParams:
         return RefineParams(self.min_angle, self.max_edge, self.chord_arc, self.max_triangles, self.cylinder,
-                            self.border_chord_arc, self.max_deviation)
+                            self.border_chord_arc, self.max_deviation, self.border_deviation)
 
 
 @dataclass(frozen=True)

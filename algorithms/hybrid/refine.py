@@ -36,7 +36,9 @@ class RefineParams:
     it (chordal.py: the distance to the surface near them), and split a border segment while the
     border curve's midpoint lies farther than this from the chord (None: off). For an arc of
     curvature κ a chord of length h deviates by κh²/8, so this sizes the mesh h ∝ 1/√κ and spreads
-    the chordal error evenly (the chord / arc ratio, 1 − κ²h²/24, sizes it h ∝ 1/κ)."""
+    the chordal error evenly (the chord / arc ratio, 1 − κ²h²/24, sizes it h ∝ 1/κ);
+    border_deviation: the tolerance for the border curve alone (None: max_deviation; math.inf: the
+    border curve is then refined only by encroachment and border_chord_arc)."""
 
     min_angle: float = 30.0
     max_edge: float | None = None
@@ -45,6 +47,7 @@ class RefineParams:
     cylinder: float = 1.5
     border_chord_arc: float = 0.99
     max_deviation: float | None = None
+    border_deviation: float | None = None
 
     def __post_init__(self) -> None:
         if not 0 <= self.min_angle <= 34:
@@ -60,6 +63,8 @@ class RefineParams:
             raise ValueError(f"border_chord_arc: must be in [0, 1), got {self.border_chord_arc}")
         if self.max_deviation is not None and not self.max_deviation > 0:
             raise ValueError(f"max_deviation: must be positive, got {self.max_deviation}")
+        if self.border_deviation is not None and not self.border_deviation > 0:
+            raise ValueError(f"border_deviation: must be positive, got {self.border_deviation}")
         if not self.cylinder >= 1:
             raise ValueError(f"cylinder: must be at least 1, got {self.cylinder}")
 
@@ -96,6 +101,8 @@ class Refiner:
         self.border_dev_cache: dict[tuple[int, int], float] = {}
         self.fallbacks = 0
         self.pending: list[int] = []
+        bd = params.border_deviation if params.border_deviation is not None else params.max_deviation
+        self.border_tol = bd if bd is not None and math.isfinite(bd) else None
         a, b, c, d = tri.domain
         self.h = (1e-7 * (b - a), 1e-7 * (d - c))
         self.box = (a - (b - a), b + (b - a), c - (d - c), d + (d - c))
@@ -186,7 +193,7 @@ class Refiner:
                 k = (x, y) if x < y else (y, x)
                 if self.p.chord_arc > 0 and k not in cache:
                     missing.add(k)
-                if (self.p.border_chord_arc > 0 or self.p.max_deviation is not None) and k in tri.seg \
+                if (self.p.border_chord_arc > 0 or self.border_tol is not None) and k in tri.seg \
                         and k not in self.border_cache:
                     curve_missing.add(k)
         if missing:
@@ -223,7 +230,7 @@ class Refiner:
             return True
         if self.p.chord_arc > 0 and self.chord_arc(p, q) < self.p.chord_arc:
             return True
-        if self.p.max_deviation is not None and self.border_deviation(p, q) > self.p.max_deviation:
+        if self.border_tol is not None and self.border_deviation(p, q) > self.border_tol:
             return True
         return self.p.border_chord_arc > 0 and self.border_ratio(p, q) < self.p.border_chord_arc
 
