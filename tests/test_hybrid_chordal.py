@@ -117,3 +117,17 @@ def test_border_tolerance_alone_changes_only_the_border_resolution():
         assert len(boundary_loops(r.mesh.faces)) == 12
         T, U = r.points[r.faces], r.uv[r.faces]
         assert chordal_errors(spec.model.surface, T, U).max() <= p.max_deviation * (1 + 1e-9)
+
+
+def test_cli_max_deviation(tmp_path):
+    import json
+
+    from algorithms.cli import main
+
+    out, rep = tmp_path / "m.ply", tmp_path / "r.json"
+    assert main(["hybrid", "--demo", "bezier-hole", "-o", str(out), "--max-deviation", "0.01",
+                 "--max-edge", "100", "--chord-arc", "0", "--report", str(rep)]) == 0
+    d = json.loads(rep.read_text())
+    assert d["params"]["max_deviation"] == 0.01 and d["params"]["border_deviation"] is None
+    assert d["angles_after_excluding_corners"]["min"] >= 30
+    assert 150 < d["counts"]["triangles_final"] < 1500
