@@ -20,6 +20,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--min-angle", type=float, metavar="A", help="min-angle threshold in degrees (default 30)")
     p.add_argument("--max-edge", type=float, metavar="H", help="longest 3D edge (default: the spec's)")
     p.add_argument("--chord-arc", type=float, metavar="R", help="curvature limit: chord / arc ratio (default 0.98)")
+    p.add_argument("--max-deviation", type=float, metavar="E",
+                   help="curvature limit as a chordal error: largest distance between the mesh and the surface "
+                        "(and the border curve), in model units; sizes the mesh by curvature (h ∝ 1/√κ)")
+    p.add_argument("--border-deviation", type=float, metavar="E",
+                   help="the chordal tolerance for the border curve alone (default: --max-deviation; inf: off)")
     p.add_argument("--max-triangles", type=int, metavar="N", help="stop refining beyond N triangles")
     p.add_argument("--cells", type=int, metavar="N", help="Stage I background grid cells along the longer side")
     p.add_argument("--report", metavar="R.json", help="write the JSON report")
@@ -65,7 +70,8 @@ def run(args: argparse.Namespace) -> int:
             raise OutputExistsError(f"{extra}: exists already (use --force to overwrite)")
     spec = load_spec(input_path(args))
     params = spec.params(min_angle=args.min_angle, max_edge=args.max_edge, chord_arc=args.chord_arc,
-                         max_triangles=args.max_triangles, cells=args.cells)
+                         max_triangles=args.max_triangles, cells=args.cells, max_deviation=args.max_deviation,
+                         border_deviation=args.border_deviation)
     result = mesh_hybrid(spec.model, params)
     save_mesh(result.mesh, out, force=args.force)
     rep = result.report()

@@ -306,6 +306,17 @@ class Triangulation:
             return m, False
         return (float(q[0, 0]), float(q[0, 1])), True
 
+    def midpoints_on_border(self, ends: list[tuple[int, int]]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """midpoint_on_border for several curve segments (a, b) at once (one vectorised root finding)."""
+        pa = np.array([self.uv[a] for a, _ in ends], dtype=np.float64).reshape(-1, 2)
+        pb = np.array([self.uv[b] for _, b in ends], dtype=np.float64).reshape(-1, 2)
+        m = 0.5 * (pa + pb)
+        dd = pb - pa
+        n = np.stack([-dd[:, 1], dd[:, 0]], axis=1)
+        q, ok = self.model.project(m, n, 0.5 * np.hypot(dd[:, 0], dd[:, 1]))
+        self.failed_projections += int((~ok).sum())
+        return q, ok
+
     def twin_segment(self, a: int, b: int, kind: int) -> tuple[int, int] | None:
         """For a seam side of a periodic direction, the segment on the opposite side."""
         s = self.surface

@@ -13,6 +13,7 @@ from ..mesh import Mesh
 from ..metrics import AngleStats, TopologySummary, angle_histogram, angle_stats, min_angles, topology, triangle_angles
 from .border import CURVE, Border, build_border
 from .cdt import Triangulation
+from .flips import flip_pass
 from .model import HybridModel
 from .refine import RefineParams, Refiner, RefineStats
 from .smooth import smooth as smooth_pass
@@ -25,8 +26,9 @@ class HybridParams:
     cells: background grid cells along the longer direction (Stage I); delta: short-edge merge
     length as a fraction of the 3D cell diagonal (§2 step 3, default 40 %); corner_angle: trim
     corners sharper than this (degrees) are excepted from the angle bound and reported; the rest
-    are the Stage III parameters (:class:`RefineParams`); smooth: passes of the smart Laplacian
-    finishing step (smooth.py, choice: keeps the minimum angle, raises the median)."""
+    are the Stage III parameters (:class:`RefineParams`); smooth: finishing passes, each a pass of
+    edge flips (flips.py) then one of smart Laplacian smoothing (smooth.py) (choice: both keep the
+    angle and chordal bounds and raise the median)."""
 
     min_angle: float = 30.0
     max_edge: float | None = None
@@ -37,6 +39,8 @@ class HybridParams:
     cylinder: float = 1.5
     corner_angle: float = 60.0
     border_chord_arc: float = 0.99
+    max_deviation: float | None = None
+    border_deviation: float | None = None
     smooth: int = 4
     refine: bool = True
 
@@ -53,7 +57,7 @@ class HybridParams:
 
     def refine_params(self) -> RefineParams:
         return RefineParams(self.min_angle, self.max_edge, self.chord_arc, self.max_triangles, self.cylinder,
-                            self.border_chord_arc)
+                            self.border_chord_arc, self.max_deviation, self.border_deviation)
 
 
 @dataclass(frozen=True)
@@ -88,6 +92,7 @@ class HybridResult:
     timings: dict[str, float] = field(default_factory=dict)
     refine_stats: RefineStats | None = None
     smoothed_moves: int = 0
+    flips: int = 0
 
     @property
     def stats_before(self) -> AngleStats:
@@ -127,6 +132,7 @@ class HybridResult:
                 "inserted_circumcentres": rs.inserted if rs else 0,
                 "border_splits": rs.segment_splits if rs else 0,
                 "smoothing_moves": self.smoothed_moves,
+                "finishing_flips": self.flips,
             },
             "angles_before": self.stats_before.as_dict(),
             "angles_after": self.stats_after.as_dict(),
@@ -213,7 +219,12 @@ def mesh_hybrid(model: HybridModel, params: HybridParams | None = None) -> Hybri
         stats = ref.run()  # Stage III
     times["stage3_refine"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    moved = smooth_pass(tri, passes=p.smooth) if p.refine and p.smooth else 0
+    moved = flipped = 0
+    if p.refine and p.smooth:  # finishing passes: flips that raise the min angle, then smoothing, in turn
+        for _ in range(p.smooth):
+            flipped += flip_pass(tri, max_deviation=p.max_deviation)
+            moved += smooth_pass(tri, passes=1, max_deviation=p.max_deviation, guard=p.min_angle + 0.25)
+        flipped += flip_pass(tri, max_deviation=p.max_deviation)
     times["smooth"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -248,4 +259,4 @@ def mesh_hybrid(model: HybridModel, params: HybridParams | None = None) -> Hybri
     times["output"] = time.perf_counter() - t0
     times["total"] = sum(times.values())
     return HybridResult(model, p, border, uv0, p30, f0, uv, pts, faces, mesh, weld, before, after,
-                        corner_tris, cv, bv, max_f, max_d, times, stats, moved)
+                        corner_tris, cv, bv, max_f, max_d, times, stats, moved, flipped)

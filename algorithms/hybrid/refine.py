@@ -19,6 +19,7 @@ import numpy as np
 
 from .border import CURVE
 from .cdt import BLOCKED, Triangulation
+from .chordal import chordal_errors
 from .incircle import circumcentre_3d, circumcircle_2d, local_frame, min_angle_3d, orient, to_local
 
 
@@ -29,7 +30,15 @@ class RefineParams:
     max_triangles: stop refining beyond this count; border_chord_arc: (choice) the same curvature
     criterion for the border curve F = 0 (chord against the two chords through its midpoint on
     the curve), split while below; cylinder: factor on the sampled deviation l of
-    the surface from a triangle's plane (the half-height of the in-circle cylinder, Fig. 3)."""
+    the surface from a triangle's plane (the half-height of the in-circle cylinder, Fig. 3);
+    max_deviation: (choice) the curvature criterion in absolute form, the chordal error: refine a
+    triangle while the surface over its edge midpoints or its centroid lies farther than this from
+    it (chordal.py: the distance to the surface near them), and split a border segment while the
+    border curve's midpoint lies farther than this from the chord (None: off). For an arc of
+    curvature κ a chord of length h deviates by κh²/8, so this sizes the mesh h ∝ 1/√κ and spreads
+    the chordal error evenly (the chord / arc ratio, 1 − κ²h²/24, sizes it h ∝ 1/κ);
+    border_deviation: the tolerance for the border curve alone (None: max_deviation; math.inf: the
+    border curve is then refined only by encroachment and border_chord_arc)."""
 
     min_angle: float = 30.0
     max_edge: float | None = None
@@ -37,6 +46,8 @@ class RefineParams:
     max_triangles: int = 200_000
     cylinder: float = 1.5
     border_chord_arc: float = 0.99
+    max_deviation: float | None = None
+    border_deviation: float | None = None
 
     def __post_init__(self) -> None:
         if not 0 <= self.min_angle <= 34:
@@ -50,6 +61,10 @@ class RefineParams:
             raise ValueError(f"max_triangles: must be at least 1, got {self.max_triangles}")
         if not 0 <= self.border_chord_arc < 1:
             raise ValueError(f"border_chord_arc: must be in [0, 1), got {self.border_chord_arc}")
+        if self.max_deviation is not None and not self.max_deviation > 0:
+            raise ValueError(f"max_deviation: must be positive, got {self.max_deviation}")
+        if self.border_deviation is not None and not self.border_deviation > 0:
+            raise ValueError(f"border_deviation: must be positive, got {self.border_deviation}")
         if not self.cylinder >= 1:
             raise ValueError(f"cylinder: must be at least 1, got {self.cylinder}")
 
@@ -82,7 +97,12 @@ class Refiner:
         self.border_cache: dict[tuple[int, int], float] = {}
         self.circle_cache: dict[tuple[int, int, int], tuple | None] = {}
         self.dev_cache: dict[tuple[int, int, int], float] = {}
+        self.chordal_cache: dict[tuple[int, int, int], float] = {}
+        self.border_dev_cache: dict[tuple[int, int], float] = {}
         self.fallbacks = 0
+        self.pending: list[int] = []
+        bd = params.border_deviation if params.border_deviation is not None else params.max_deviation
+        self.border_tol = bd if bd is not None and math.isfinite(bd) else None
         a, b, c, d = tri.domain
         self.h = (1e-7 * (b - a), 1e-7 * (d - c))
         self.box = (a - (b - a), b + (b - a), c - (d - c), d + (d - c))
@@ -115,6 +135,24 @@ class Refiner:
         for k, r in zip(keys, ratio.tolist()):
             self.arc_cache[k] = r
 
+    def _chordal(self, ts: list[int]) -> None:
+        """The chordal error of triangles (max_deviation, chordal.py), all of them in two surface calls."""
+        tri = self.tri
+        keys = [tuple(tri.tv[t]) for t in ts]
+        p3, uv = tri.p3, tri.uv
+        T3 = np.array([[p3[a], p3[b], p3[c]] for a, b, c in keys])
+        T2 = np.array([[uv[a], uv[b], uv[c]] for a, b, c in keys])
+        for k, d in zip(keys, chordal_errors(tri.surface, T3, T2).tolist()):
+            self.chordal_cache[k] = d
+
+    def chordal(self, t: int) -> float:
+        key = tuple(self.tri.tv[t])
+        d = self.chordal_cache.get(key)
+        if d is None:
+            self._chordal([t])
+            d = self.chordal_cache[key]
+        return d
+
     def badness(self, t: int) -> tuple[float, float] | None:
         """None for a good triangle, else its priority (smaller first)."""
         tri = self.tri
@@ -133,6 +171,8 @@ class Refiner:
             worst = min(cache[k] for k in keys)
             if worst < self.p.chord_arc:
                 return (0.0, -lmax)
+        if self.p.max_deviation is not None and self.chordal(t) > self.p.max_deviation:
+            return (0.0, -lmax)
         if ang < self.p.min_angle:
             if (a, b, c)[k] in self.corners:
                 self.skipped += 1
@@ -141,19 +181,29 @@ class Refiner:
         return None
 
     def push_many(self, ts: list[int]) -> None:
-        """Queue new triangles; their missing chord / arc ratios in one surface call."""
+        """Queue new triangles; their missing chord / arc ratios in one surface call, the missing border
+        ratios of their curve edges in one root-finding call."""
         tri = self.tri
-        if self.p.chord_arc > 0:
-            cache = self.arc_cache
-            missing = set()
-            for t in ts:
-                a, b, c = tri.tv[t]
-                for x, y in ((a, b), (b, c), (c, a)):
-                    k = (x, y) if x < y else (y, x)
-                    if k not in cache:
-                        missing.add(k)
-            if missing:
-                self._arcs(sorted(missing))
+        cache = self.arc_cache
+        missing = set()
+        curve_missing = set()
+        for t in ts:
+            a, b, c = tri.tv[t]
+            for x, y in ((a, b), (b, c), (c, a)):
+                k = (x, y) if x < y else (y, x)
+                if self.p.chord_arc > 0 and k not in cache:
+                    missing.add(k)
+                if (self.p.border_chord_arc > 0 or self.border_tol is not None) and k in tri.seg \
+                        and k not in self.border_cache:
+                    curve_missing.add(k)
+        if missing:
+            self._arcs(sorted(missing))
+        if self.p.max_deviation is not None:
+            todo = [t for t in ts if tri.alive[t] and tuple(tri.tv[t]) not in self.chordal_cache]
+            if todo:
+                self._chordal(todo)
+        if curve_missing:
+            self._border_ratios(sorted(curve_missing))
         for t in ts:
             self.push(t)
 
@@ -180,27 +230,52 @@ class Refiner:
             return True
         if self.p.chord_arc > 0 and self.chord_arc(p, q) < self.p.chord_arc:
             return True
+        if self.border_tol is not None and self.border_deviation(p, q) > self.border_tol:
+            return True
         return self.p.border_chord_arc > 0 and self.border_ratio(p, q) < self.p.border_chord_arc
 
     def border_ratio(self, p: int, q: int) -> float:
         """chord / arc of a curve segment, the arc through its midpoint on F = 0 (cached)."""
         key = (p, q) if p < q else (q, p)
         hit = self.border_cache.get(key)
-        if hit is not None:
-            return hit
+        if hit is None:
+            self._border_ratios([key])
+            hit = self.border_cache[key]
+        return hit
+
+    def border_deviation(self, p: int, q: int) -> float:
+        """The distance of a curve segment's midpoint on F = 0 from the middle of its chord (3D)."""
+        key = (p, q) if p < q else (q, p)
+        if key not in self.border_cache:
+            self._border_ratios([key])
+        return self.border_dev_cache.get(key, 0.0)
+
+    def _border_ratios(self, keys: list[tuple[int, int]]) -> None:
+        """border_ratio for several segments: their midpoints on F = 0 found together (one vectorised
+        root finding, Triangulation.midpoints_on_border), kept as the split targets."""
         tri = self.tri
-        sg = tri.seg.get(key)
-        r = 1.0
-        if sg is not None and sg[0] == CURVE:
-            target, ok = tri.midpoint_on_border(sg[1], sg[2], CURVE)
-            self.target_cache[key] = (target, ok)
-            if ok:
-                M = tri.surface(np.array([target[0]]), np.array([target[1]]))[0]
-                P, Q = np.array(tri.p3[p]), np.array(tri.p3[q])
-                arc = float(np.linalg.norm(M - P) + np.linalg.norm(Q - M))
-                r = float(np.linalg.norm(Q - P)) / arc if arc > 0 else 1.0
-        self.border_cache[key] = r
-        return r
+        curve = []
+        for key in keys:
+            sg = tri.seg.get(key)
+            if sg is not None and sg[0] == CURVE:
+                curve.append(key)
+            else:
+                self.border_cache[key] = 1.0
+        if not curve:
+            return
+        ends = [(tri.seg[k][1], tri.seg[k][2]) for k in curve]
+        targets, ok = tri.midpoints_on_border(ends)
+        M = tri.surface(targets[:, 0], targets[:, 1])
+        P = np.array([tri.p3[a] for a, _ in ends])
+        Q = np.array([tri.p3[b] for _, b in ends])
+        arc = np.linalg.norm(M - P, axis=1) + np.linalg.norm(Q - M, axis=1)
+        chord = np.linalg.norm(Q - P, axis=1)
+        ratio = np.where(ok & (arc > 0), chord / np.where(arc > 0, arc, 1.0), 1.0)
+        dev = np.where(ok, np.linalg.norm(M - 0.5 * (P + Q), axis=1), 0.0)
+        for k, tgt, good, r, e in zip(curve, targets.tolist(), ok.tolist(), ratio.tolist(), dev.tolist()):
+            self.target_cache[k] = ((tgt[0], tgt[1]), good)
+            self.border_cache[k] = r
+            self.border_dev_cache[k] = e
 
     # ---- the 3D flip test (Fig. 3) ----------------------------------------------------------------------
     def deviation(self, t: int) -> float:
@@ -308,27 +383,35 @@ class Refiner:
         ua, ub, uc = tri.uv[a], tri.uv[b], tri.uv[c]
         u = la * ua[0] + lb * ub[0] + lc * uc[0]
         v = la * ua[1] + lb * ub[1] + lc * uc[1]
-        e = np.array(E3)
         hu, hv = self.h
+        box = self.box
+        tol_u, tol_v = 1e-9 * (box[1] - box[0]), 1e-9 * (box[3] - box[2])
+        ex, ey, ez = E3
         R = None
-        for _ in range(6):  # Gauss-Newton on |R(u, v) − E3|²  (7)
-            u = min(max(u, self.box[0]), self.box[1])
-            v = min(max(v, self.box[2]), self.box[3])
-            q = tri.surface(np.array([u, u + hu, u]), np.array([v, v, v + hv]))
+        for _ in range(4):  # Gauss-Newton on |R(u, v) − E3|²  (7); one surface call per step
+            u = min(max(u, box[0]), box[1])
+            v = min(max(v, box[2]), box[3])
+            q = tri.surface(np.array([u, u + hu, u]), np.array([v, v, v + hv])).tolist()
             R = q[0]
-            J = np.stack([(q[1] - R) / hu, (q[2] - R) / hv], axis=1)
-            r = R - e
-            JtJ = J.T @ J
-            det = JtJ[0, 0] * JtJ[1, 1] - JtJ[0, 1] * JtJ[1, 0]
+            ju = ((q[1][0] - R[0]) / hu, (q[1][1] - R[1]) / hu, (q[1][2] - R[2]) / hu)
+            jv = ((q[2][0] - R[0]) / hv, (q[2][1] - R[1]) / hv, (q[2][2] - R[2]) / hv)
+            r0, r1, r2 = R[0] - ex, R[1] - ey, R[2] - ez
+            a11 = ju[0] * ju[0] + ju[1] * ju[1] + ju[2] * ju[2]
+            a12 = ju[0] * jv[0] + ju[1] * jv[1] + ju[2] * jv[2]
+            a22 = jv[0] * jv[0] + jv[1] * jv[1] + jv[2] * jv[2]
+            det = a11 * a22 - a12 * a12
             if det <= 0:
                 break
-            g = J.T @ r
-            du = -(JtJ[1, 1] * g[0] - JtJ[0, 1] * g[1]) / det
-            dv = -(-JtJ[1, 0] * g[0] + JtJ[0, 0] * g[1]) / det
+            g1 = ju[0] * r0 + ju[1] * r1 + ju[2] * r2
+            g2 = jv[0] * r0 + jv[1] * r1 + jv[2] * r2
+            du = -(a22 * g1 - a12 * g2) / det
+            dv = -(a11 * g2 - a12 * g1) / det
+            if abs(du) < tol_u and abs(dv) < tol_v:  # converged: R is the surface point at (u, v)
+                return u, v, (R[0], R[1], R[2])
             u += du
             v += dv
-            if abs(du) < 1e-11 * (self.box[1] - self.box[0]) and abs(dv) < 1e-11 * (self.box[3] - self.box[2]):
-                break
+        u = min(max(u, box[0]), box[1])
+        v = min(max(v, box[2]), box[3])
         q = tri.surface(np.array([u]), np.array([v]))[0]
         return u, v, (float(q[0]), float(q[1]), float(q[2]))
 
@@ -343,26 +426,35 @@ class Refiner:
         tw = tri.twin_segment(a, b, sg[0])
         if tw is not None:
             pairs.append(tw)
-        for x, y in pairs:
-            found = tri.find_edge(x, y)
-            if found is None:
-                continue
-            key2 = (x, y) if x < y else (y, x)
-            kind, fx, fy = tri.seg[key2]
-            hit = self.target_cache.pop(key2, None) if kind == CURVE else None
-            target = hit[0] if hit is not None else tri.midpoint_on_border(fx, fy, kind)[0]
-            ux, uy = tri.uv[fx], tri.uv[fy]
-            mid = (0.5 * (ux[0] + uy[0]), 0.5 * (ux[1] + uy[1]))
-            t, k = found
-            v = tri.add_vertex(mid)
-            tri.split_edge(t, k, v)
-            if kind == CURVE:
-                self.move_onto_curve(v, target)
-            self.seg_splits += 1
-        tri.index_seams()
+        new = []
+        cb, tri.on_new_triangle = tri.on_new_triangle, None  # queue the fans once on the curve
+        try:
+            for x, y in pairs:
+                found = tri.find_edge(x, y)
+                if found is None:
+                    continue
+                key2 = (x, y) if x < y else (y, x)
+                kind, fx, fy = tri.seg[key2]
+                hit = self.target_cache.pop(key2, None) if kind == CURVE else None
+                target = hit[0] if hit is not None else tri.midpoint_on_border(fx, fy, kind)[0]
+                ux, uy = tri.uv[fx], tri.uv[fy]
+                mid = (0.5 * (ux[0] + uy[0]), 0.5 * (ux[1] + uy[1]))
+                t, k = found
+                v = tri.add_vertex(mid)
+                tri.split_edge(t, k, v)
+                if kind == CURVE:
+                    self.move_onto_curve(v, target, queue=False)
+                new.append(v)
+                self.seg_splits += 1
+        finally:
+            tri.on_new_triangle = cb
+        if sg[0] != CURVE:  # the seam index holds the sides of P only
+            tri.index_seams()
+        if new:
+            self.pending.extend(t for v in new for t in tri.fan(v))
         return True
 
-    def move_onto_curve(self, v: int, target: tuple[float, float]) -> bool:
+    def move_onto_curve(self, v: int, target: tuple[float, float], *, queue: bool = True) -> bool:
         """Move a border vertex from its chord midpoint onto F = 0 if its fan stays valid in (u, v)."""
         tri = self.tri
         fan = tri.fan(v)
@@ -380,43 +472,120 @@ class Refiner:
             tv = tri.tv[t]
             self.dev_cache.pop((tv[0], tv[1], tv[2]), None)
             self.circle_cache.pop((tv[0], tv[1], tv[2]), None)
+            self.chordal_cache.pop((tv[0], tv[1], tv[2]), None)
             for w in tv:
                 if w != v:
                     k2 = (v, w) if v < w else (w, v)
                     self.arc_cache.pop(k2, None)
                     self.border_cache.pop(k2, None)
+                    self.border_dev_cache.pop(k2, None)
                     self.target_cache.pop(k2, None)
         tri._legalize(v, [(t, tri.tv[t].index(v)) for t in fan])
-        self.push_many(tri.fan(v))
+        if queue:
+            self.pending.extend(tri.fan(v))
         return True
 
     # ---- the main loop ----------------------------------------------------------------------------------------
     def run(self) -> RefineStats:
+        """Refinement in rounds (the order of insertions is free in Ruppert's algorithm): the triangles
+        made since the last round are assessed together (chord / arc, chordal error and border ratios:
+        a few vectorised surface calls), the encroached or bad border segments are split, then every bad
+        triangle known at the start of the round is refined in priority order (skipping those an earlier
+        insertion removed), its surface circumcentre found with the others in one vectorised
+        Gauss-Newton (7). The insertions themselves are sequential: each changes what the next one sees."""
         tri = self.tri
         tri.flip_test = self.flip_test
-        tri.on_new_triangle = self.push_many
-        self.push_many([t for t in range(len(tri.tv)) if tri.alive[t]])
+        self.pending = [t for t in range(len(tri.tv)) if tri.alive[t]]
+        tri.on_new_triangle = self._collect
         hit = False
-        # sequential by nature: every insertion changes the triangles the next one sees
-        while self.seg_queue or self.heap or self._retry_off_curve():
+        while True:
             if tri.n_alive >= self.p.max_triangles:
                 hit = True
                 break
+            if self.pending:
+                ts = list(dict.fromkeys(self.pending))
+                self.pending = []
+                self.push_many([t for t in ts if tri.alive[t]])
             if self.seg_queue:
-                p, q = self.seg_queue.pop()
-                if tri.is_constrained(p, q) and tri.find_edge(p, q) is not None:
-                    t, k = tri.find_edge(p, q)
-                    if self.segment_bad(p, q, tri.tv[t][k]):
+                segs, self.seg_queue = self.seg_queue, []
+                for p, q in reversed(segs):
+                    if tri.n_alive >= self.p.max_triangles:
+                        break
+                    found = tri.find_edge(p, q) if tri.is_constrained(p, q) else None
+                    if found is not None and self.segment_bad(p, q, tri.tv[found[0]][found[1]]):
                         self.split_segment(p, q)
                 continue
-            _, _, _, t, verts = heapq.heappop(self.heap)
-            if not tri.alive[t] or tuple(tri.tv[t]) != verts:
-                continue
-            if self.badness(t) is None:
-                continue
-            self.refine_triangle(t)
+            if not self.heap:
+                if self.pending or self._retry_off_curve():
+                    continue
+                break
+            items = [heapq.heappop(self.heap) for _ in range(len(self.heap))]
+            todo = [(t, verts) for *_, t, verts in items if tri.alive[t] and tuple(tri.tv[t]) == verts]
+            sps = self._surface_points([t for t, _ in todo])
+            for (t, verts), sp in zip(todo, sps):
+                if tri.n_alive >= self.p.max_triangles:
+                    break
+                if not tri.alive[t] or tuple(tri.tv[t]) != verts or self.badness(t) is None:
+                    continue
+                self.refine_triangle(t, sp)
         tri.on_new_triangle = None
         return RefineStats(self.inserted, self.seg_splits, self.skipped, hit, len(tri.off_curve))
+
+    def _collect(self, ts: list[int]) -> None:
+        self.pending.extend(ts)
+
+    def _surface_points(self, ts: list[int]) -> list[tuple[float, float, tuple] | None]:
+        """surface_point for many triangles at once: the 3D circumcentres E3, the affine guesses in (u, v),
+        then Gauss-Newton on |R(u, v) − E3|² (7) vectorised (one surface call per step for all)."""
+        tri = self.tri
+        out: list[tuple[float, float, tuple] | None] = [None] * len(ts)
+        rows, E, G = [], [], []
+        for i, t in enumerate(ts):
+            a, b, c = tri.tv[t]
+            A, B, C = tri.p3[a], tri.p3[b], tri.p3[c]
+            fr = local_frame(A, B, C)
+            if fr is None:
+                continue
+            bx = to_local(fr, A, B)[0]
+            cl = to_local(fr, A, C)
+            ex, ey, _ = circumcircle_2d(bx, cl[0], cl[1])
+            x, y, _z = fr
+            E3 = (A[0] + x[0] * ex + y[0] * ey, A[1] + x[1] * ex + y[1] * ey, A[2] + x[2] * ex + y[2] * ey)
+            lc = ey / cl[1]  # barycentric coordinates of E3′ in A′B′C′, carried over to (u, v)
+            lb = (ex - lc * cl[0]) / bx
+            la = 1.0 - lb - lc
+            ua, ub, uc = tri.uv[a], tri.uv[b], tri.uv[c]
+            rows.append(i)
+            E.append(E3)
+            G.append((la * ua[0] + lb * ub[0] + lc * uc[0], la * ua[1] + lb * ub[1] + lc * uc[1]))
+        if not rows:
+            return out
+        E3s = np.array(E)
+        uv = np.array(G)
+        box = self.box
+        lo, hi = np.array([box[0], box[2]]), np.array([box[1], box[3]])
+        hu, hv = self.h
+        k = len(uv)
+        for _ in range(4):
+            uv = np.clip(uv, lo, hi)
+            q = tri.surface(np.r_[uv[:, 0], uv[:, 0] + hu, uv[:, 0]], np.r_[uv[:, 1], uv[:, 1], uv[:, 1] + hv])
+            R = q[:k]
+            ju, jv = (q[k:2 * k] - R) / hu, (q[2 * k:] - R) / hv
+            r = R - E3s
+            a11, a12, a22 = (ju * ju).sum(1), (ju * jv).sum(1), (jv * jv).sum(1)
+            g1, g2 = (ju * r).sum(1), (jv * r).sum(1)
+            det = a11 * a22 - a12 * a12
+            ok = det > 0
+            det = np.where(ok, det, 1.0)
+            step = np.where(ok[:, None], -np.stack([(a22 * g1 - a12 * g2) / det, (a11 * g2 - a12 * g1) / det], 1), 0.0)
+            uv = uv + step
+            if (np.abs(step) <= 1e-9 * (hi - lo)).all():
+                break
+        uv = np.clip(uv, lo, hi)
+        P = tri.surface(uv[:, 0], uv[:, 1])
+        for i, (u, v), (x, y, z) in zip(rows, uv.tolist(), P.tolist()):
+            out[i] = (u, v, (x, y, z))
+        return out
 
     def _retry_off_curve(self) -> bool:
         """Once the queues are empty: move border vertices still on their chords onto F = 0."""
@@ -426,11 +595,12 @@ class Refiner:
                 moved = True
         return moved
 
-    def refine_triangle(self, t: int) -> None:
+    def refine_triangle(self, t: int, sp: tuple[float, float, tuple] | None = None) -> None:
         tri = self.tri
         a, b, c = tri.tv[t]
-        E3 = circumcentre_3d(tri.p3[a], tri.p3[b], tri.p3[c])
-        sp = self.surface_point(t, E3) if E3 is not None else None
+        if sp is None:
+            E3 = circumcentre_3d(tri.p3[a], tri.p3[b], tri.p3[c])
+            sp = self.surface_point(t, E3) if E3 is not None else None
         if sp is not None:
             u, v, P3 = sp
             t2, status, k = tri.locate((u, v), t, stop_at_segments=True)
@@ -484,7 +654,7 @@ class Refiner:
 
     def _requeue(self, t: int) -> None:
         if self.tri.alive[t]:
-            self.push(t)
+            self.pending.append(t)
 
     def encroached_by(self, t0: int, P: tuple[float, float, float]) -> list[tuple[int, int]]:
         tri = self.tri

@@ -23,7 +23,7 @@ def r_and(x: Any, *ys: Any) -> Any:
     """x ∧ y ≡ x + y − √(x² + y²)  (3); n-ary, folded from the left."""
     out = x
     for y in ys:
-        out = out + y - np.sqrt(out * out + y * y)
+        out = out + y - np.hypot(out, y)  # hypot: √(x² + y²) in one pass, no overflow
     return out
 
 
@@ -31,7 +31,7 @@ def r_or(x: Any, *ys: Any) -> Any:
     """x ∨ y ≡ x + y + √(x² + y²)  (3); n-ary, folded from the left."""
     out = x
     for y in ys:
-        out = out + y + np.sqrt(out * out + y * y)
+        out = out + y + np.hypot(out, y)
     return out
 
 

@@ -1,50 +1,147 @@
-"""A finishing pass after Stage III (choice, not in the paper): smart Laplacian smoothing.
+"""A finishing pass after Stage III (choice, not in the paper): smart Laplacian smoothing on the surface.
 
-Each interior vertex is moved, in (u, v), to the mean of its neighbours' parameters (then onto
-the surface through R); the move is kept only if every triangle around it stays counter-clockwise
-in (u, v) and the smallest 3D angle around the vertex does not decrease. So the minimum angle
-bound of the refinement is kept and the median improves. Border vertices never move.
-Sequential (each accepted move changes its neighbours' fans); the surface is evaluated once per pass.
+Each interior vertex is moved towards the 3D mean of its neighbours: the target is found in (u, v)
+by Gauss-Newton on |R(u, v) − mean|² (two steps from the vertex's own parameters, the Jacobian by
+finite differences), so a non-uniform parameterisation does not pull the vertex off the middle of
+its neighbours in space. The move is kept only if every triangle around the vertex stays
+counter-clockwise in (u, v), the mean of the triangles' minimum 3D angles around it increases
+while their smallest stays above the angle bound (or, where it was below already, does not decrease),
+and (when a chordal tolerance is given) the chordal error of its triangles stays within it. So the minimum
+angle bound and the chordal bound of the refinement are kept and the median improves. Border
+vertices never move (they are on F = 0 or on the sides of P, and the seams stay welded).
+
+Vectorised: the interior vertices are split into independent sets (greedy colouring of the edge
+graph: no two vertices of a set share an edge, so no triangle has two of them) and each set is
+moved at once, with one surface call per step for the whole set.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .cdt import Triangulation
-from .incircle import min_angle_3d, orient
+from .chordal import chordal_errors
 
 
-def smooth(tri: Triangulation, *, passes: int = 2) -> int:
-    """Returns the number of accepted moves."""
-    border = set(tri.border_vertices().tolist())
-    verts = sorted({v for t, al in zip(tri.tv, tri.alive) if al for v in t} - border)
+def _min_angles(T: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(K, 3, 3) triangles → (K,) smallest angle in degrees: the angle opposite the shortest edge, by
+    the law of cosines (one arccos per triangle)."""
+    e = T[:, [1, 2, 0]] - T  # edges (0→1, 1→2, 2→0)
+    L2 = np.einsum("kij,kij->ki", e, e)
+    L2.sort(axis=1)
+    a2, b2, c2 = L2[:, 0], L2[:, 1], L2[:, 2]
+    den = 2.0 * np.sqrt(b2 * c2)
+    cos = np.where(den > 0, (b2 + c2 - a2) / np.where(den > 0, den, 1.0), 1.0)
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def _colours(n: int, edges: NDArray[np.int64], movable: NDArray[np.bool_]) -> list[NDArray[np.int64]]:
+    """Greedy colouring of the movable vertices: lists of independent vertex sets."""
+    nb: list[list[int]] = [[] for _ in range(n)]
+    for a, b in edges.tolist():
+        nb[a].append(b)
+        nb[b].append(a)
+    colour = [-1] * n
+    for v in np.flatnonzero(movable).tolist():
+        used = {colour[w] for w in nb[v]}
+        c = 0
+        while c in used:
+            c += 1
+        colour[v] = c
+    col = np.array(colour)
+    return [np.flatnonzero(col == c) for c in range(col.max() + 1)] if (col >= 0).any() else []
+
+
+def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None = None, guard: float = 30.0) -> int:
+    """Returns the number of accepted moves. guard: the angle bound kept (degrees)."""
+    faces = tri.faces()
+    if not len(faces) or passes <= 0:
+        return 0
+    n = len(tri.uv)
+    uv = np.array(tri.uv, dtype=np.float64)
+    p3 = np.array(tri.p3, dtype=np.float64)
+    movable = np.zeros(n, dtype=bool)
+    movable[np.unique(faces)] = True
+    movable[tri.border_vertices()] = False
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    edges = np.unique(e, axis=0)
+    deg = np.bincount(edges.ravel(), minlength=n).astype(np.float64)
+    # incidence: for each (triangle, corner) pair, sorted by vertex
+    tri_of = np.repeat(np.arange(len(faces)), 3)
+    corner = np.tile(np.arange(3), len(faces))
+    vert = faces.ravel()
+    sets = _colours(n, edges, movable)
+    a, b, c, d = tri.domain
+    hu, hv = 1e-7 * (b - a), 1e-7 * (d - c)
+    surf = tri.surface
     accepted = 0
     for _ in range(passes):
-        fans = {v: tri.fan(v) for v in verts}
-        targets = []
-        for v in verts:
-            nb = {w for t in fans[v] for w in tri.tv[t] if w != v}
-            targets.append((sum(tri.uv[w][0] for w in nb) / len(nb), sum(tri.uv[w][1] for w in nb) / len(nb)))
-        T = np.array(targets).reshape(-1, 2)
-        Q = tri.surface(T[:, 0], T[:, 1]).tolist()
-        for v, tgt, q in zip(verts, targets, Q):
-            fan = fans[v]
-            before = min(min_angle_3d(*(tri.p3[w] for w in tri.tv[t]))[0] for t in fan)
-            old_uv, old_p = tri.uv[v], tri.p3[v]
-            ok = True
-            for t in fan:
-                tv = tri.tv[t]
-                i = tv.index(v)
-                if orient(tgt, tri.uv[tv[(i + 1) % 3]], tri.uv[tv[(i + 2) % 3]]) <= 0:
-                    ok = False
-                    break
-            if not ok:
+        for vs in sets:
+            if not len(vs):
                 continue
-            tri.uv[v], tri.p3[v] = tgt, (q[0], q[1], q[2])
-            after = min(min_angle_3d(*(tri.p3[w] for w in tri.tv[t]))[0] for t in fan)
-            if after < before:
-                tri.uv[v], tri.p3[v] = old_uv, old_p
-            else:
-                accepted += 1
+            # the 3D mean of the neighbours
+            s3 = np.zeros((n, 3))
+            np.add.at(s3, edges[:, 0], p3[edges[:, 1]])
+            np.add.at(s3, edges[:, 1], p3[edges[:, 0]])
+            goal = s3[vs] / deg[vs, None]
+            x = uv[vs].copy()
+            R = p3[vs].copy()
+            for _step in range(2):  # Gauss-Newton on |R(u, v) − goal|²
+                q = surf(np.r_[x[:, 0] + hu, x[:, 0]], np.r_[x[:, 1], x[:, 1] + hv])
+                ru, rv = (q[:len(x)] - R) / hu, (q[len(x):] - R) / hv
+                r = goal - R
+                a11, a12, a22 = (ru * ru).sum(1), (ru * rv).sum(1), (rv * rv).sum(1)
+                g1, g2 = (ru * r).sum(1), (rv * r).sum(1)
+                det = a11 * a22 - a12 * a12
+                ok = det > 0
+                det = np.where(ok, det, 1.0)
+                x = x + np.where(ok[:, None], np.stack([(a22 * g1 - a12 * g2) / det,
+                                                        (a11 * g2 - a12 * g1) / det], axis=1), 0.0)
+                x[:, 0] = np.clip(x[:, 0], a, b)
+                x[:, 1] = np.clip(x[:, 1], c, d)
+                R = surf(x[:, 0], x[:, 1])
+            # the triangles around the set, old and new
+            sel = np.isin(vert, vs)
+            ft, fc, fv = tri_of[sel], corner[sel], vert[sel]
+            pos = np.searchsorted(vs, fv)  # vs is sorted (flatnonzero)
+            F = faces[ft]
+            T3o, T2o = p3[F], uv[F]
+            T3n, T2n = T3o.copy(), T2o.copy()
+            rows = np.arange(len(F))
+            T3n[rows, fc] = R[pos]
+            T2n[rows, fc] = x[pos]
+            area = ((T2n[:, 1, 0] - T2n[:, 0, 0]) * (T2n[:, 2, 1] - T2n[:, 0, 1])
+                    - (T2n[:, 1, 1] - T2n[:, 0, 1]) * (T2n[:, 2, 0] - T2n[:, 0, 0]))
+            scale = np.abs(T2o[:, 1] - T2o[:, 0]).sum(1) + np.abs(T2o[:, 2] - T2o[:, 0]).sum(1)
+            good = area > 1e-12 * scale * scale
+            mo, mn = _min_angles(T3o), np.where(good, _min_angles(T3n), -1.0)
+            old_min = np.full(len(vs), np.inf)
+            new_min = np.full(len(vs), np.inf)
+            np.minimum.at(old_min, pos, mo)
+            np.minimum.at(new_min, pos, mn)
+            cnt = np.bincount(pos, minlength=len(vs))
+            old_mean = np.bincount(pos, mo, minlength=len(vs)) / np.maximum(cnt, 1)
+            new_mean = np.bincount(pos, mn, minlength=len(vs)) / np.maximum(cnt, 1)
+            # the fan's smallest angle may not fall below the bound (nor below its old value if it was
+            # under it already), and its mean minimum angle must improve
+            accept = (new_min >= np.minimum(old_min, guard)) & (new_mean > old_mean)
+            if max_deviation is not None and accept.any():
+                # the fans' chordal errors after the move; before it only where they exceed the tolerance
+                fsel = accept[pos]
+                worst_new = np.zeros(len(vs))
+                np.maximum.at(worst_new, pos[fsel], chordal_errors(surf, T3n[fsel], T2n[fsel]))
+                over = accept & (worst_new > max_deviation)
+                if over.any():
+                    fo = over[pos]
+                    worst_old = np.zeros(len(vs))
+                    np.maximum.at(worst_old, pos[fo], chordal_errors(surf, T3o[fo], T2o[fo]))
+                    accept &= ~over | (worst_new <= worst_old)
+            mv = vs[accept]
+            uv[mv] = x[accept]
+            p3[mv] = R[accept]
+            accepted += int(accept.sum())
+    for v in np.flatnonzero(movable).tolist():
+        tri.uv[v] = (float(uv[v, 0]), float(uv[v, 1]))
+        tri.p3[v] = (float(p3[v, 0]), float(p3[v, 1]), float(p3[v, 2]))
     return accepted

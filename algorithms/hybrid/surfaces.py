@@ -69,6 +69,16 @@ def bernstein(n: int, t: NDArray[np.float64]) -> NDArray[np.float64]:
     return binom * t**i * (1.0 - t) ** (n - i)
 
 
+def _bernstein_rows(n: int, t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(N, n+1) Bernstein polynomials of degree n at t (N,), by the recurrence
+    B_i^k = (1 − t) B_i^(k−1) + t B_(i−1)^(k−1) (no powers: fast and stable)."""
+    s = 1.0 - t
+    cols = [np.ones_like(t)]
+    for _k in range(n):  # contiguous 1D columns: a few microseconds per operation for small N
+        cols = [s * cols[0]] + [s * cols[i] + t * cols[i - 1] for i in range(1, len(cols))] + [t * cols[-1]]
+    return np.stack(cols, axis=1)
+
+
 def bezier(control: ArrayLike, *, name: str = "bezier") -> Surface:
     """A tensor-product Bezier patch of any degree (8): p(u,v) = Σ_i Σ_j B_i^n(u) B_j^m(v) P_ij.
 
@@ -80,16 +90,13 @@ def bezier(control: ArrayLike, *, name: str = "bezier") -> Surface:
     n, m = P.shape[0] - 1, P.shape[1] - 1
     P.setflags(write=False)
     Pf = P.reshape(n + 1, (m + 1) * 3)
-    bn = np.array([math.comb(n, k) for k in range(n + 1)], dtype=np.float64)
-    bm = np.array([math.comb(m, k) for k in range(m + 1)], dtype=np.float64)
-    iu, iv = np.arange(n + 1), np.arange(m + 1)
 
     def ev(u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
         shape = u.shape
-        uu, vv = u.reshape(-1, 1), v.reshape(-1, 1)
-        Bu = bn * uu**iu * (1.0 - uu) ** (n - iu)  # B_i^n(u)
-        Bv = bm * vv**iv * (1.0 - vv) ** (m - iv)  # B_j^m(v)
-        out = ((Bu @ Pf).reshape(-1, m + 1, 3) * Bv[:, :, None]).sum(axis=1)  # (8)
+        Bu = _bernstein_rows(n, u.reshape(-1))  # B_i^n(u)
+        Bv = _bernstein_rows(m, v.reshape(-1))  # B_j^m(v)
+        Q = (Bu @ Pf).reshape(-1, m + 1, 3)
+        out = np.matmul(Bv[:, None, :], Q)[:, 0, :]  # Σ_i Σ_j B_i^n(u) B_j^m(v) P_ij  (8)
         return out.reshape(shape + (3,))
 
     return Surface(name, ev, (0.0, 1.0, 0.0, 1.0))
