@@ -24,7 +24,10 @@ def preload() -> None:
     for name in ("scipy.fft", "scipy.linalg", "scipy.optimize", "scipy.sparse", "scipy.sparse.csgraph",
                  "scipy.spatial", "trimesh", "trimesh.exchange.load", "trimesh.exchange.ply", "trimesh.exchange.obj",
                  "trimesh.exchange.stl", "trimesh.exchange.off", "trimesh.bounds", "trimesh.nsphere",
-                 "algorithms.normalize", "algorithms.topology", "algorithms.boundary", "algorithms.metrics"):
+                 "algorithms.normalize", "algorithms.topology", "algorithms.boundary", "algorithms.metrics",
+                 "algorithms.repair", "algorithms.repair_field", "algorithms.darning", "algorithms.darning.fair",
+                 "algorithms.darning.liepa", "algorithms.darning.fan", "algorithms.darning.refine",
+                 "algorithms.holes", "algorithms.bridge_graph", "scipy.sparse.linalg"):
         try:
             importlib.import_module(name)
         except ImportError:
@@ -52,6 +55,21 @@ def default_find(model: Icadm, params: FieldParams, *, progress=None, cancel=Non
 def default_trace(model: Icadm, params: FieldParams, vertex: int):
     _, trace = field_api()
     return trace(model, params, vertex)
+
+
+def default_repair(model: Icadm, params, *, progress=None, cancel=None):
+    """algorithms.repair.repair with RepairParams (the field's parameters and the darning method)."""
+    from algorithms.repair import repair
+
+    return repair(model, params, progress=progress, cancel=cancel)
+
+
+def repair_job(repair: Callable, model: Icadm, params) -> Callable:
+    """params: RepairParams; the result carries what it was computed for (stale results are dropped)."""
+    def fn(progress=None, cancel=None):
+        return model, params, repair(model, params, progress=progress, cancel=cancel)
+
+    return fn
 
 
 def load_job(path: str, points: str | None) -> Callable:

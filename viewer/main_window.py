@@ -1,9 +1,10 @@
 """The explorer's main window: the 3D view in the centre, docks for Parameters, Bridges,
 Inspector, Timeline and Plot, a status bar with progress and Cancel, menus and shortcuts.
 
-Data flows one way: file -> Icadm -> (worker) field result -> model -> views. Widgets write new
-parameters through the model; every edit recomputes in the worker (debounced, stale jobs
-cancelled and their results dropped) and the views update from the model's signals.
+Data flows one way: file -> Icadm -> (worker) field result [-> repair] -> model -> views.
+Widgets write new parameters through the model; every edit recomputes in the worker (debounced,
+stale jobs cancelled and their results dropped) and the views update from the model's signals.
+Once the user ran Repair (F6), edits recompute the repair too.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from pathlib import Path
 from PySide6.QtCore import QSettings, Qt
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (
+    QDialog,
     QDockWidget,
     QFileDialog,
     QLabel,
@@ -46,7 +48,7 @@ MAX_RECENT = 10
 
 
 class MainWindow(QMainWindow):
-    def __init__(self, *, settings: QSettings | None = None, find=None, trace=None) -> None:
+    def __init__(self, *, settings: QSettings | None = None, find=None, trace=None, repair=None) -> None:
         super().__init__()
         self.t_created = time.perf_counter()
         self.setWindowTitle("Bridgefield")
@@ -55,6 +57,8 @@ class MainWindow(QMainWindow):
         self.settings = settings if settings is not None else QSettings("Bridgefield", "explorer")
         self.find = find or jobs.default_find  # injectable for tests
         self.trace = trace or jobs.default_trace
+        self.repair_fn = repair or jobs.default_repair
+        self.workspaces: list = []  # hybrid / F-rep workspace windows opened from the Demos menu
         jobs.preload()  # first imports never happen in a worker thread
         self.model = ExplorerModel(self)
         self.worker = Worker(self)
@@ -139,8 +143,8 @@ class MainWindow(QMainWindow):
         f.addSeparator()
         self.act_save_input = self._action(f, "Save &mesh (normalised input)…", self.save_mesh_dialog, "Ctrl+S",
                                            tip="the input as normalised, with its free points")
-        self.act_save_repaired = self._action(f, "Save &repaired mesh…", self.save_repaired_dialog,
-                                              tip="needs the repair pipeline (algorithms/repair.py)")
+        self.act_save_repaired = self._action(f, "Save &repaired mesh…", self.save_repaired_dialog, "Ctrl+Alt+R",
+                                              tip="the repaired surface (after Repair, F6)")
         self.act_save_repaired.setEnabled(False)
         self.act_shot = self._action(f, "Export &screenshot (PNG)…", self.screenshot_dialog, "Ctrl+Shift+S")
         self.act_anim = self._action(f, "Export &animation (GIF/MP4)…", self.animation_dialog, "Ctrl+Shift+E")
@@ -157,6 +161,9 @@ class MainWindow(QMainWindow):
         self.act_redo.setEnabled(False)
         e.addSeparator()
         self._action(e, "Re&compute", self.recompute, "F5")
+        self.act_repair = self._action(e, "&Repair", self.run_repair, "F6",
+                                       tip="run the repair pipeline (bridges, hole splitting, darning); "
+                                           "parameter edits then recompute it")
         self.act_cancel = self._action(e, "&Cancel computation", self.cancel, "Esc")
 
         v = mb.addMenu("&View")
@@ -185,6 +192,12 @@ class MainWindow(QMainWindow):
         self._action(p, "&Last step", tl.last, "End")
         self.act_loop = self._action(p, "L&oop", tl.loop.setChecked, "L", checkable=True)
         tl.loop.toggled.connect(self.act_loop.setChecked)
+        p.addSeparator()
+        self.act_stages = self._action(p, "Repair &stages on the timeline",
+                                       lambda on: self.model.set_timeline_mode("stages" if on else "line"), "T",
+                                       checkable=True, tip="the timeline plays the repair's stages instead of "
+                                                           "the force line")
+        self.act_stages.setEnabled(False)
 
         self.demos_menu = mb.addMenu("&Demos")
         self._fill_demos()
@@ -201,7 +214,6 @@ class MainWindow(QMainWindow):
                 a.setStatusTip(d.description)
                 a.setToolTip(d.description)
                 a.triggered.connect(lambda *_, n=name: self.open_demo(n))
-                a.setEnabled(d.kind == "repair")  # hybrid and F-rep workspaces come later
 
     def _connect(self) -> None:
         m, w = self.model, self.worker
@@ -218,6 +230,10 @@ class MainWindow(QMainWindow):
         self.parameters.layerToggled.connect(self.set_layer_visible)
         self.scene.pickedBoundary.connect(self.trace_from)
         self.scene.pickedBridge.connect(self.model.select)
+        m.darningChanged.connect(self._darning_changed)
+        m.repairChanged.connect(self._repair_shown)
+        m.timelineModeChanged.connect(self._timeline_mode_shown)
+        self.parameters.repair_button.clicked.connect(self.run_repair)
 
     # ================================================================ files
     def open_path(self, path: str, points: str | None = None, *, demo: str | None = None) -> None:
@@ -229,13 +245,31 @@ class MainWindow(QMainWindow):
         self.status.setText(f"Loading {Path(path).name}…")
         self.worker.submit("load", jobs.load_job(str(path), points))
 
-    def open_demo(self, name: str) -> None:
+    def open_demo(self, name: str):
+        """A repair demo opens here; a hybrid or F-rep demo opens its workspace window (returned)."""
         try:
             d = find_demo(name)
         except KeyError as exc:
             self.show_error("Unknown demo", str(exc))
-            return
+            return None
+        if d.kind in ("hybrid", "frep"):
+            return self.open_workspace(d.kind, name)
         self.open_path(str(d.path), demo=name)
+        return None
+
+    def open_workspace(self, kind: str, demo: str | None = None):
+        from .workspaces import open_workspace
+
+        try:
+            w = open_workspace(kind, self, demo=demo)
+        except Exception as exc:
+            self.show_error("Cannot open the workspace", f"{type(exc).__name__}: {exc}")
+            return None
+        self.workspaces = [x for x in self.workspaces if _alive(x)] + [w]
+        w.destroyed.connect(lambda *_: setattr(self, "workspaces", [x for x in self.workspaces
+                                                                      if x is not w and _alive(x)]))
+        self.status.setText(f"Opened the {kind} workspace on demo {demo}")
+        return w
 
     def open_dialog(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Open mesh", self._last_dir(), MESH_FILTER)
@@ -309,7 +343,32 @@ class MainWindow(QMainWindow):
                 self.show_error("Cannot save", str(exc))
 
     def save_repaired_dialog(self) -> None:
-        self.show_error("Not yet", "Saving a repaired mesh needs the repair pipeline (not in this build).")
+        """The file dialog asks before replacing a file; only then is it overwritten."""
+        if self.model.repair is None:
+            self.show_error("Nothing to save", "Run the repair first (Edit > Repair, F6).")
+            return
+        dlg = QFileDialog(self, "Save repaired mesh", self._last_dir(), MESH_FILTER)
+        dlg.setAcceptMode(QFileDialog.AcceptSave)
+        dlg.setDefaultSuffix("ply")
+        if self.model.source is not None:
+            dlg.selectFile(Path(self.model.source.path).stem + "-repaired.ply")
+        if dlg.exec() != QDialog.Accepted or not dlg.selectedFiles():
+            return
+        self.save_repaired(dlg.selectedFiles()[0], force=True)  # the dialog confirmed any overwrite
+
+    def save_repaired(self, path: str, *, force: bool = False) -> bool:
+        """Write the repaired surface (PLY/OBJ/STL/OFF); an existing file only with force."""
+        r = self.model.repair
+        if r is None:
+            self.show_error("Nothing to save", "Run the repair first (Edit > Repair, F6).")
+            return False
+        try:
+            out = save_mesh(r.mesh, path, force=force)
+        except Exception as exc:
+            self.show_error("Cannot save", str(exc))
+            return False
+        self.status.setText(f"Saved the repaired mesh to {out} ({r.mesh.n_faces} faces)")
+        return True
 
     def screenshot_dialog(self) -> None:
         path, _ = QFileDialog.getSaveFileName(self, "Export screenshot", self._last_dir(), "PNG image (*.png)")
@@ -431,6 +490,28 @@ class MainWindow(QMainWindow):
     def _params_changed(self, params) -> None:
         if self.model.icadm is not None:
             self.worker.schedule("field", jobs.bridges_job(self.find, self.model.icadm, params))
+            self._schedule_repair()
+
+    def _darning_changed(self, darning: str) -> None:
+        if not self._schedule_repair():
+            self.status.setText(f"Darning method: {darning} (used by Repair, F6)")
+
+    def _schedule_repair(self) -> bool:
+        m = self.model
+        if m.icadm is None or not m.repair_wanted:
+            return False
+        self.worker.schedule("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params))
+        return True
+
+    def run_repair(self) -> None:
+        """Run the repair pipeline on the current input (in the worker); show its stages."""
+        m = self.model
+        if m.icadm is None:
+            self.show_error("Nothing to repair", "Open a mesh or a demo first.")
+            return
+        m.repair_wanted = True
+        self._show_stages_next = True
+        self.worker.submit("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params))
 
     def trace_from(self, vertex: int) -> None:
         """Trace a force line from a boundary vertex (the inspector's click), then animate it."""
@@ -458,6 +539,8 @@ class MainWindow(QMainWindow):
         self._job_t0 = time.perf_counter()
         if kind == "field":
             self.status.setText("Computing the field and tracing force lines…")
+        elif kind == "repair":
+            self.status.setText("Repairing: bridges, hole splitting, darning…")
 
     def _job_progress(self, kind: str, frac: float) -> None:
         self.progress.setValue(int(max(0.0, min(1.0, frac)) * 1000))
@@ -499,7 +582,39 @@ class MainWindow(QMainWindow):
             m.select(-1)
             m.set_line(line, label=f"traced from vertex {vertex}", frame=0)
             self.status.setText(f"Force line from vertex {vertex}: {line.status}, {line.steps} steps")
+            m.set_timeline_mode("line")
             self.timeline.play()
+        elif kind == "repair":
+            model, params, rep = result
+            if model is not m.icadm or params != m.repair_params:
+                return  # computed for an input or parameters no longer shown
+            m.set_repair(rep)
+            self.status.setText(self.repair_summary(rep))
+            self.timing.setText(f"repair {seconds * 1000:.0f} ms")
+            if getattr(self, "_show_stages_next", False):
+                self._show_stages_next = False
+                m.set_timeline_mode("stages")
+                m.set_stage(0)
+                self.timeline.play()
+
+    @staticmethod
+    def repair_summary(r) -> str:
+        from algorithms.metrics import topology
+
+        topo = topology(r.mesh.faces)
+        darned = sum(h.split_by < 0 for h in r.holes)
+        return (f"Repaired ({r.class_found}): {len(r.bridges)} bridges kept, {len(r.rejected)} rejected, "
+                f"{darned} holes darned with {r.params.darning}, {len(r.new_faces)} new faces; "
+                f"{'watertight' if topo.watertight else f'{topo.boundary_loops} boundary loops left'}")
+
+    def _repair_shown(self, repair) -> None:
+        self.act_save_repaired.setEnabled(repair is not None)
+        self.act_stages.setEnabled(repair is not None)
+
+    def _timeline_mode_shown(self, mode: str) -> None:
+        self.act_stages.blockSignals(True)
+        self.act_stages.setChecked(mode == "stages")
+        self.act_stages.blockSignals(False)
 
     def _result_shown(self, result) -> None:
         if result is None and self.model.icadm is not None:
@@ -507,7 +622,7 @@ class MainWindow(QMainWindow):
 
     def _job_failed(self, kind: str, message: str) -> None:
         what = {"load": "Cannot open the file", "field": "The field computation failed",
-                "trace": "Tracing failed"}.get(kind, "Error")
+                "trace": "Tracing failed", "repair": "The repair failed"}.get(kind, "Error")
         if kind == "load" and isinstance(self._pending_session, dict):
             self._pending_session = None
         self.show_error(what, message)
@@ -585,6 +700,10 @@ class MainWindow(QMainWindow):
         self.timeline.pause()
         if self.compare_window is not None:
             self.compare_window.close()
+        for w in list(self.workspaces):
+            if _alive(w):
+                w.close()
+        self.workspaces = []
         self.worker.shutdown()
         self.scene.close()
 
@@ -592,3 +711,13 @@ class MainWindow(QMainWindow):
         self.shutdown()
         super().closeEvent(event)
 
+
+
+def _alive(widget) -> bool:
+    """False once Qt deleted the C++ object behind a Python wrapper (a closed workspace window)."""
+    try:
+        from shiboken6 import isValid
+
+        return bool(isValid(widget))
+    except ImportError:  # pragma: no cover
+        return True
