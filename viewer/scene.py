@@ -97,6 +97,7 @@ class SceneLayers:
         self._line: ForceLine | None = None
         self._arrows: dict[str, pv.PolyData] = {}
         self._bridge_polys: list[np.ndarray] = []
+        self.meshes: dict[str, pv.PolyData] = {}
         self.stage_mode = False  # the timeline shows the repair's stages: field layers hidden
 
     # ---------------------------------------------------------------- plumbing
@@ -110,6 +111,7 @@ class SceneLayers:
         return self.plotter.renderers[self.plotter.renderers.loc_to_index(self.subplot)]
 
     def _remove(self, name: str) -> None:
+        self.meshes.pop(name, None)
         self._here()
         self.plotter.remove_actor(name, render=False)
 
@@ -122,6 +124,7 @@ class SceneLayers:
     def _add(self, mesh, name: str, layer: str, **kw):
         self._here()
         actor = self.plotter.add_mesh(mesh, name=name, render=False, reset_camera=False, **kw)
+        self.meshes[name] = mesh  # what each named actor draws (tests and exports read it)
         actor.SetVisibility(self.shown(layer))
         return actor
 
