@@ -241,6 +241,9 @@ class MainWindow(QMainWindow):
         if not Path(path).exists():
             self.show_error("Cannot open", f"{path}: no such file")
             return
+        if demo is None:  # a bundled demo opened by its path (recent files, a dialog) keeps its name
+            here = Path(path).resolve()
+            demo = next((n for n, d in all_demos().items() if d.kind == "repair" and d.path.resolve() == here), None)
         self._loading = Source(str(path), points, demo)
         self.status.setText(f"Loading {Path(path).name}…")
         self.worker.submit("load", jobs.load_job(str(path), points))
