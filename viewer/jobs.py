@@ -64,10 +64,10 @@ def default_repair(model: Icadm, params, *, progress=None, cancel=None):
     return repair(model, params, progress=progress, cancel=cancel)
 
 
-def repair_job(repair: Callable, model: Icadm, params) -> Callable:
+def repair_job(repair: Callable, model: Icadm, params, runner=None) -> Callable:
     """params: RepairParams; the result carries what it was computed for (stale results are dropped)."""
     def fn(progress=None, cancel=None):
-        return model, params, repair(model, params, progress=progress, cancel=cancel)
+        return model, params, _via(runner, repair, (model, params), progress, cancel)
 
     return fn
 
@@ -79,15 +79,22 @@ def load_job(path: str, points: str | None) -> Callable:
     return fn
 
 
-def bridges_job(find: Callable, model: Icadm, params: FieldParams) -> Callable:
+def _via(runner, fn: Callable, args: tuple, progress, cancel, *, control: bool = True):
+    """fn(*args) here (a worker thread) or in a worker process of ``runner`` (a ProcessRunner)."""
+    if runner is None:
+        return fn(*args, progress=progress, cancel=cancel) if control else fn(*args)
+    return runner.call(fn, args, progress=progress, cancel=cancel, control=control)
+
+
+def bridges_job(find: Callable, model: Icadm, params: FieldParams, runner=None) -> Callable:
     def fn(progress=None, cancel=None):
-        return model, params, find(model, params, progress=progress, cancel=cancel)
+        return model, params, _via(runner, find, (model, params), progress, cancel)
 
     return fn
 
 
-def trace_job(trace: Callable, model: Icadm, params: FieldParams, vertex: int) -> Callable:
+def trace_job(trace: Callable, model: Icadm, params: FieldParams, vertex: int, runner=None) -> Callable:
     def fn(progress=None, cancel=None):
-        return model, params, vertex, trace(model, params, vertex)
+        return model, params, vertex, _via(runner, trace, (model, params, vertex), progress, cancel, control=False)
 
     return fn

@@ -48,7 +48,8 @@ MAX_RECENT = 10
 
 
 class MainWindow(QMainWindow):
-    def __init__(self, *, settings: QSettings | None = None, find=None, trace=None, repair=None) -> None:
+    def __init__(self, *, settings: QSettings | None = None, find=None, trace=None, repair=None,
+                 processes: bool | None = None) -> None:
         super().__init__()
         self.t_created = time.perf_counter()
         self.setWindowTitle("Bridgefield")
@@ -58,8 +59,16 @@ class MainWindow(QMainWindow):
         self.find = find or jobs.default_find  # injectable for tests
         self.trace = trace or jobs.default_trace
         self.repair_fn = repair or jobs.default_repair
+        # the real algorithms run in worker processes (their compiled kernels hold the GIL);
+        # injected stand-ins (tests) run in worker threads
+        if processes is None:
+            processes = find is None and trace is None and repair is None
+        self.runner = None
+        if processes:
+            from .procpool import shared_runner
+
+            self.runner = shared_runner()
         self.workspaces: list = []  # hybrid / F-rep workspace windows opened from the Demos menu
-        jobs.preload()  # first imports never happen in a worker thread
         self.model = ExplorerModel(self)
         self.worker = Worker(self)
         self.errors: list[str] = []  # every error shown to the user, newest last
@@ -246,6 +255,7 @@ class MainWindow(QMainWindow):
             demo = next((n for n, d in all_demos().items() if d.kind == "repair" and d.path.resolve() == here), None)
         self._loading = Source(str(path), points, demo)
         self.status.setText(f"Loading {Path(path).name}…")
+        jobs.preload()  # first imports never happen in a worker thread (done once, after the first frame)
         self.worker.submit("load", jobs.load_job(str(path), points))
 
     def open_demo(self, name: str):
@@ -488,11 +498,11 @@ class MainWindow(QMainWindow):
         """Compute the field's bridges for the current input and parameters (in the worker)."""
         if self.model.icadm is None:
             return
-        self.worker.submit("field", jobs.bridges_job(self.find, self.model.icadm, self.model.params))
+        self.worker.submit("field", jobs.bridges_job(self.find, self.model.icadm, self.model.params, self.runner))
 
     def _params_changed(self, params) -> None:
         if self.model.icadm is not None:
-            self.worker.schedule("field", jobs.bridges_job(self.find, self.model.icadm, params))
+            self.worker.schedule("field", jobs.bridges_job(self.find, self.model.icadm, params, self.runner))
             self._schedule_repair()
 
     def _darning_changed(self, darning: str) -> None:
@@ -503,7 +513,7 @@ class MainWindow(QMainWindow):
         m = self.model
         if m.icadm is None or not m.repair_wanted:
             return False
-        self.worker.schedule("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params))
+        self.worker.schedule("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params, self.runner))
         return True
 
     def run_repair(self) -> None:
@@ -514,7 +524,7 @@ class MainWindow(QMainWindow):
             return
         m.repair_wanted = True
         self._show_stages_next = True
-        self.worker.submit("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params))
+        self.worker.submit("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params, self.runner))
 
     def trace_from(self, vertex: int) -> None:
         """Trace a force line from a boundary vertex (the inspector's click), then animate it."""
@@ -528,7 +538,7 @@ class MainWindow(QMainWindow):
         self.inspector.set_picked({"vertex": vertex, "loop": loop, "index": index,
                                    "point": m.icadm.mesh.vertices[vertex], "omega": omega})
         self.status.setText(f"Tracing a force line from vertex {vertex}…")
-        self.worker.submit("trace", jobs.trace_job(self.trace, m.icadm, m.params, vertex))
+        self.worker.submit("trace", jobs.trace_job(self.trace, m.icadm, m.params, vertex, self.runner))
 
     def cancel(self) -> None:
         if self.worker.busy:
@@ -654,7 +664,7 @@ class MainWindow(QMainWindow):
             return None
         if self.compare_window is not None:
             self.compare_window.close()
-        self.compare_window = CompareWindow(self.model, self.find, parent=self)
+        self.compare_window = CompareWindow(self.model, self.find, parent=self, runner=self.runner)
         self.compare_window.show()
         return self.compare_window
 
@@ -707,7 +717,7 @@ class MainWindow(QMainWindow):
             if _alive(w):
                 w.close()
         self.workspaces = []
-        self.worker.shutdown()
+        self.worker.shutdown()  # cancels this window's calls in the shared worker processes
         self.scene.close()
 
     def closeEvent(self, event) -> None:  # noqa: N802 (Qt API)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from algorithms.boundary import LoopFrame, loop_frames
@@ -215,7 +216,11 @@ class ExplorerModel(QObject):
         self.selection = index
         self.selectionChanged.emit(index)
         if index >= 0:
-            self.set_line(cands[index].line, label=f"bridge {index}")
+            line = cands[index].line
+            if self.line is not None and self.line_label == f"bridge {index}" and _same_line(self.line, line):
+                self.line = line  # a recompute that did not move the line (k_i): nothing to redraw
+                return
+            self.set_line(line, label=f"bridge {index}")
 
     def set_line(self, line: ForceLine | None, *, label: str = "", frame: int | None = None) -> None:
         self.line = line
@@ -238,3 +243,9 @@ class ExplorerModel(QObject):
             if len(hit):
                 return li, int(hit[0])
         return -1, -1
+
+
+def _same_line(a: ForceLine, b: ForceLine) -> bool:
+    """The same recorded steps (points, normals, forces) and ending."""
+    return (a is b) or (a.status == b.status and a.steps == b.steps and np.array_equal(a.points, b.points)
+                        and np.array_equal(a.normals, b.normals) and np.array_equal(a.forces, b.forces))

@@ -98,6 +98,7 @@ class SceneLayers:
         self._arrows: dict[str, pv.PolyData] = {}
         self._bridge_polys: list[np.ndarray] = []
         self.meshes: dict[str, pv.PolyData] = {}
+        self._tubes_drawn: tuple[list, pv.PolyData] | None = None  # (kept polylines, their tubes)
         self.stage_mode = False  # the timeline shows the repair's stages: field layers hidden
 
     # ---------------------------------------------------------------- plumbing
@@ -201,9 +202,14 @@ class SceneLayers:
     def draw_result(self, result, *, clim: tuple[float, float] | None = None, repair=None) -> None:
         """Ω on boundary points, kept bridges as tubes by quality, lines that did not arrive by
         status, arrived lines the repair rejected (when a repair is given) in dark grey."""
-        for name in ("bridges", "rejected", "selection", "attraction"):
+        for name in ("rejected", "selection", "attraction"):
             self._remove(name)
         self._bridge_polys = []
+        cands = list(result.candidates) if result is not None else []
+        kept = kept_mask(result, repair) if cands else np.zeros(0, dtype=bool)
+        q = qualities(result) if cands else np.zeros(0)
+        self._bridge_polys = [np.asarray(c.line.points) for c in cands]
+        self._draw_tubes([self._bridge_polys[i] for i in np.nonzero(kept)[0]], q[kept], clim)
         if result is None:
             return
         # Ω on boundary points (loop order = loop_frames(model.mesh))
@@ -217,24 +223,6 @@ class SceneLayers:
                       scalar_bar_args=dict(title=self.bar_title(OMEGA_BAR), vertical=True, position_x=0.87,
                                            position_y=0.08, height=0.38, width=0.05, fmt="%.3g",
                                            title_font_size=14, label_font_size=12, color="black"))
-        cands = list(result.candidates)
-        if not cands:
-            return
-        kept = kept_mask(result, repair)
-        q = qualities(result)
-        self._bridge_polys = [np.asarray(c.line.points) for c in cands]
-        if kept.any():
-            lines = [self._bridge_polys[i] for i in np.nonzero(kept)[0]]
-            lo, hi = clim if clim is not None else (float(q[kept].min()), float(q[kept].max()))
-            if hi <= lo:
-                hi = lo + (abs(lo) * 1e-3 or 1e-9)
-            t = tubes(lines, q[kept], radius=0.0045 * self.scale, name="quality")
-        if kept.any() and t.n_points:
-            self._add(t, "bridges", "bridges", scalars="quality", cmap=QUALITY_CMAP, clim=[lo, hi],
-                      smooth_shading=True, pickable=True,
-                      scalar_bar_args=dict(title=self.bar_title(QUALITY_BAR), vertical=True, position_x=0.87,
-                                           position_y=0.55, height=0.38, width=0.05, fmt="%.3g",
-                                           title_font_size=14, label_font_size=12, color="black"))
         if (~kept).any():
             idx = np.nonzero(~kept)[0]
             pd = polylines([self._bridge_polys[i] for i in idx])
@@ -243,6 +231,40 @@ class SceneLayers:
             pd.cell_data["status_rgb"] = status_colour
             self._add(pd, "rejected", "rejected", scalars="status_rgb", rgb=True, line_width=2, opacity=0.8,
                       pickable=True)
+
+    def _draw_tubes(self, lines: list[np.ndarray], values: np.ndarray, clim) -> None:
+        """The kept bridges as tubes coloured by quality. When the lines are the ones drawn (a k_i
+        edit changes the qualities, not the lines), only the colours change, in place."""
+        if not lines:
+            self._remove("bridges")
+            self._tubes_drawn = None
+            return
+        lo, hi = clim if clim is not None else (float(values.min()), float(values.max()))
+        if hi <= lo:
+            hi = lo + (abs(lo) * 1e-3 or 1e-9)
+        old = self._tubes_drawn
+        actor = self.actor("bridges")
+        if (actor is not None and old is not None and len(old[0]) == len(lines)
+                and all(a is b or np.array_equal(a, b) for a, b in zip(old[0], lines))):
+            t = old[1]
+            t.point_data["quality"][:] = np.asarray(values, dtype=np.float64)[t.point_data["line"]]
+            t.Modified()
+            actor.mapper.scalar_range = (lo, hi)
+            self._tubes_drawn = (lines, t)
+            return
+        t = tubes(lines, values, radius=0.0045 * self.scale, name="quality")
+        self._remove("bridges")
+        self._tubes_drawn = None
+        if t.n_points:
+            # Gouraud with the tube filter's normals: smooth_shading would draw a copy, and the
+            # in-place colour update above must reach the drawn mesh
+            self._add(t, "bridges", "bridges", scalars="quality", cmap=QUALITY_CMAP, clim=[lo, hi],
+                      interpolation="gouraud", pickable=True, scalar_bar_args=self._quality_bar())
+            self._tubes_drawn = (lines, t)
+
+    def _quality_bar(self) -> dict:
+        return dict(title=self.bar_title(QUALITY_BAR), vertical=True, position_x=0.87, position_y=0.55, height=0.38,
+                    width=0.05, fmt="%.3g", title_font_size=14, label_font_size=12, color="black")
 
     def draw_selection(self, result, index: int) -> None:
         self._remove("selection")

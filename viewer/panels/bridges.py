@@ -21,10 +21,19 @@ _ROOT = QModelIndex()
 COLUMNS = ("#", "status", "kept", "quality", "Q", "q_T", "q12", "q3", "q4", "start", "end", "steps", "length", "why")
 
 
+def _text(column: int, v) -> str:
+    if isinstance(v, float):
+        return "" if np.isnan(v) else f"{v:.4g}"
+    if column == 10 and v < 0:
+        return "-"
+    return str(v)
+
+
 class BridgeTableModel(QAbstractTableModel):
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
         self.rows: list[tuple] = []
+        self.text: list[tuple[str, ...]] = []  # what the cells show (formatted once per result)
         self.status: list[str] = []
 
     def set_result(self, result, repair=None) -> None:
@@ -41,6 +50,7 @@ class BridgeTableModel(QAbstractTableModel):
                                   int(line.start_vertex), int(line.end_vertex), int(line.steps), float(line.length),
                                   why[i]))
                 self.status.append(line.status)
+        self.text = [tuple(_text(c, v) for c, v in enumerate(row)) for row in self.rows]
         self.endResetModel()
 
     def rowCount(self, parent=_ROOT) -> int:  # noqa: N802
@@ -57,13 +67,9 @@ class BridgeTableModel(QAbstractTableModel):
     def data(self, index, role=Qt.DisplayRole):
         if not index.isValid():
             return None
-        v = self.rows[index.row()][index.column()]
         if role == Qt.DisplayRole:
-            if isinstance(v, float):
-                return "" if np.isnan(v) else f"{v:.4g}"
-            if index.column() == 10 and v < 0:
-                return "-"
-            return str(v)
+            return self.text[index.row()][index.column()]
+        v = self.rows[index.row()][index.column()]
         if role == Qt.UserRole:  # sort key
             return v
         if role == Qt.ForegroundRole and index.column() == 1:
@@ -88,7 +94,8 @@ class BridgesPanel(QWidget):
         self.view.setSelectionBehavior(QAbstractItemView.SelectRows)
         self.view.setSelectionMode(QAbstractItemView.SingleSelection)
         self.view.verticalHeader().setVisible(False)
-        self.view.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeToContents)
+        self.view.horizontalHeader().setSectionResizeMode(QHeaderView.Interactive)
+        self._sized_for = -1  # columns are fitted to their contents when the row count changes
         lay = QVBoxLayout(self)
         lay.setContentsMargins(2, 2, 2, 2)
         lay.addWidget(self.view)
@@ -100,6 +107,10 @@ class BridgesPanel(QWidget):
 
     def _refresh(self, *_) -> None:
         self.table_model.set_result(self.model.result, self.model.repair)
+        n = self.table_model.rowCount()
+        if n != self._sized_for:
+            self._sized_for = n
+            self.view.resizeColumnsToContents()
         self.show_selection(self.model.selection)
 
     def source_row(self, view_row: int) -> int:
