@@ -24,6 +24,8 @@ from PySide6.QtWidgets import (
     QMessageBox,
     QProgressBar,
     QPushButton,
+    QVBoxLayout,
+    QWidget,
 )
 
 from algorithms.demos import all_demos
@@ -78,13 +80,26 @@ class MainWindow(QMainWindow):
         self.compare_window = None
 
         self.scene = SceneView(self.model, self)
-        self.setCentralWidget(self.scene.widget)
+        self.setCentralWidget(self._native_box(self.scene.widget))
         self._make_docks()
         self._make_status_bar()
         self._make_menus()
         self._connect()
 
     # ================================================================ construction
+    @staticmethod
+    def _native_box(view) -> QWidget:
+        """The 3D view inside a native child window. Qt composes a window that holds an OpenGL
+        widget with OpenGL on every repaint of any of its widgets; in its own native window the
+        view's GL stays there, and a progress bar or a slider repaints with a plain raster flush
+        (software GL under Xvfb took ~100 ms per repaint of the whole window)."""
+        box = QWidget()
+        box.setAttribute(Qt.WA_NativeWindow, True)
+        lay = QVBoxLayout(box)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(view)
+        return box
+
     def _dock(self, title: str, widget, area) -> QDockWidget:
         d = QDockWidget(title, self)
         d.setObjectName(title)

@@ -114,6 +114,10 @@ class SceneLayers:
     def _remove(self, name: str) -> None:
         self.meshes.pop(name, None)
         self._here()
+        bar = {"bridges": QUALITY_BAR, "attraction": OMEGA_BAR}.get(name)
+        if bar is not None and self.bar_title(bar) in getattr(self.plotter, "scalar_bars", {}):
+            # a scalar bar keeps the range of every mapper it was made for: drop it with its actor
+            self.plotter.remove_scalar_bar(self.bar_title(bar), render=False)
         self.plotter.remove_actor(name, render=False)
 
     def actor(self, name: str):
@@ -250,6 +254,7 @@ class SceneLayers:
             t.point_data["quality"][:] = np.asarray(values, dtype=np.float64)[t.point_data["line"]]
             t.Modified()
             actor.mapper.scalar_range = (lo, hi)
+            actor.mapper.lookup_table.scalar_range = (lo, hi)  # the scalar bar reads the table
             self._tubes_drawn = (lines, t)
             return
         t = tubes(lines, values, radius=0.0045 * self.scale, name="quality")

@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
+from PySide6.QtOpenGLWidgets import QOpenGLWidget
 from pyvistaqt import QtInteractor
 
 from .scene import SceneLayers
@@ -56,10 +57,16 @@ class SceneView(QObject):
             self._render_timer.start(0)
 
     def render_now(self) -> None:
+        """Render the scene once. A shown view is asked to repaint (its paintGL renders): calling
+        the render window directly would render twice (pyvistaqt's paintGL always renders, and a
+        finished render schedules a paint)."""
         if getattr(self.plotter, "_closed", False):
             return
         t = time.perf_counter()
-        self.plotter.render()
+        if self.plotter.isVisible() and getattr(self.plotter, "_rendered", False):
+            QOpenGLWidget.update(self.plotter)
+        else:
+            self.plotter.render()
         self.render_seconds += time.perf_counter() - t
         self.renders += 1
 

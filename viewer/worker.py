@@ -78,7 +78,7 @@ class Worker(QObject):
     cancelled = Signal(str)
     busyChanged = Signal(bool)
 
-    def __init__(self, parent: QObject | None = None, *, debounce_ms: int = 80) -> None:
+    def __init__(self, parent: QObject | None = None, *, debounce_ms: int = 40) -> None:
         super().__init__(parent)
         self._next_id = 0
         self._latest: dict[str, int] = {}  # kind -> id of the newest job
