@@ -24,8 +24,6 @@ from PySide6.QtWidgets import (
     QMessageBox,
     QProgressBar,
     QPushButton,
-    QVBoxLayout,
-    QWidget,
 )
 
 from algorithms.demos import all_demos
@@ -80,7 +78,7 @@ class MainWindow(QMainWindow):
         self.compare_window = None
 
         self.scene = SceneView(self.model, self)
-        self.setCentralWidget(self._native_box(self.scene.widget))
+        self.setCentralWidget(self.scene.widget)
         self._make_docks()
         self._make_status_bar()
         self._make_menus()
@@ -88,22 +86,17 @@ class MainWindow(QMainWindow):
 
     # ================================================================ construction
     @staticmethod
-    def _native_box(view) -> QWidget:
-        """The 3D view inside a native child window. Qt composes a window that holds an OpenGL
-        widget with OpenGL on every repaint of any of its widgets; in its own native window the
-        view's GL stays there, and a progress bar or a slider repaints with a plain raster flush
-        (software GL under Xvfb took ~100 ms per repaint of the whole window)."""
-        box = QWidget()
-        box.setAttribute(Qt.WA_NativeWindow, True)
-        lay = QVBoxLayout(box)
-        lay.setContentsMargins(0, 0, 0, 0)
-        lay.addWidget(view)
-        return box
+    def _native(widget) -> None:
+        """Give a widget its own native window. Qt composes a window that holds an OpenGL widget
+        (the 3D view) with OpenGL on every repaint of any of its widgets: under software GL that
+        cost ~100 ms per progress-bar tick. A native child window repaints with a raster flush."""
+        widget.setAttribute(Qt.WA_NativeWindow, True)
 
     def _dock(self, title: str, widget, area) -> QDockWidget:
         d = QDockWidget(title, self)
         d.setObjectName(title)
         d.setWidget(widget)
+        self._native(widget)
         self.addDockWidget(area, d)
         return d
 
@@ -138,6 +131,7 @@ class MainWindow(QMainWindow):
         sb.addPermanentWidget(self.timing)
         sb.addPermanentWidget(self.progress)
         sb.addPermanentWidget(self.cancel_button)
+        self._native(sb)
 
     def _action(self, menu, text: str, slot, shortcut=None, *, tip: str = "", checkable=False) -> QAction:
         a = QAction(text, self)

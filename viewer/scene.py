@@ -206,7 +206,7 @@ class SceneLayers:
     def draw_result(self, result, *, clim: tuple[float, float] | None = None, repair=None) -> None:
         """Ω on boundary points, kept bridges as tubes by quality, lines that did not arrive by
         status, arrived lines the repair rejected (when a repair is given) in dark grey."""
-        for name in ("rejected", "selection", "attraction"):
+        for name in ("rejected", "selection"):
             self._remove(name)
         self._bridge_polys = []
         cands = list(result.candidates) if result is not None else []
@@ -215,10 +215,23 @@ class SceneLayers:
         self._bridge_polys = [np.asarray(c.line.points) for c in cands]
         self._draw_tubes([self._bridge_polys[i] for i in np.nonzero(kept)[0]], q[kept], clim)
         if result is None:
+            self._remove("attraction")
             return
         # Ω on boundary points (loop order = loop_frames(model.mesh))
         att = [np.asarray(a, dtype=np.float64) for a in getattr(result, "attraction", ())]
-        if att and len(att) == len(self.frames) and all(len(a) == len(f.points) for a, f in zip(att, self.frames)):
+        if not (att and len(att) == len(self.frames) and all(len(a) == len(f.points)
+                                                             for a, f in zip(att, self.frames))):
+            self._remove("attraction")
+        elif self.actor("attraction") is not None and "attraction" in self.meshes:
+            omega = np.concatenate(att)  # same points, new values: in place (no new scalar bar)
+            pts = self.meshes["attraction"]
+            pts.point_data["omega"][:] = omega
+            pts.Modified()
+            hi = float(omega.max()) or 1.0
+            mapper = self.actor("attraction").mapper
+            mapper.scalar_range = (0.0, hi)
+            mapper.lookup_table.scalar_range = (0.0, hi)
+        else:
             pts = points(np.vstack([f.points for f in self.frames]))
             pts.point_data["omega"] = np.concatenate(att)
             hi = float(pts.point_data["omega"].max()) or 1.0
