@@ -160,7 +160,9 @@ def attraction_index(ctx: FieldContext, *, exclude_fraction: float = 0.2) -> tup
         win = np.array([_window(int(n), exclude_fraction) for n in S.loop_len])
         ev = field.evaluate(S.points, x_vertex=S.vertex, x_loop=S.loop, x_pos=S.pos, x_window=win)
     else:
-        ev = field.evaluate(S.points, x_vertex=S.vertex, x_group=S.group)
+        # x_loop / x_pos without a window exclude nothing: they mark consecutive points (full mode's
+        # coherence across points, FieldParams.point_stride)
+        ev = field.evaluate(S.points, x_vertex=S.vertex, x_group=S.group, x_loop=S.loop, x_pos=S.pos)
     n, ten = top_normal(ev.H, S.tangent, S.normal)  # (16a)
     f = np.einsum("nij,nj->ni", ev.H, n)
     omega = np.where((f * S.outward).sum(axis=1) > 0, ten, 0.0)

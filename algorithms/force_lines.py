@@ -108,7 +108,7 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
     if s0.force is None or t0 <= 0 or s0.normal is None:
         return done(TOO_WEAK)
     f, n = s0.force, s0.normal
-    if params.tracer == "simple" and isinstance(field, Biaf) and not field.field.full and len(field.field.sources):
+    if isinstance(field, Biaf) and len(field.field.sources):
         rec = (pts, nrm, frc, ten)
         return _trace_fused(field, x, f, n, params, targets, step, avoid_tree, floor, cancel, rec, done)
     dev = params.deviation * step
@@ -164,8 +164,8 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
 def _trace_fused(field: Biaf, x: Arr, f: Arr, n: Arr, params: FieldParams, targets: Targets, step: float,
                  avoid_tree: cKDTree | None, floor: float, cancel: Callable[[], bool] | None, rec: tuple,
                  done: Callable[[str, int], ForceLine]) -> ForceLine:
-    """The simple tracer's loop in numba (field/light_tracer.py) for the light-mode BIAF: the same
-    steps as trace's Python loop, FUSED_CHUNK steps per call."""
+    """The tracer's loop (simple or predictor-corrector) in numba (field/light_tracer.py) for the
+    BIAF (light or full mode): the same steps as trace's Python loop, FUSED_CHUNK steps per call."""
     F = field.field
     S = F.sources
     pts, nrm, frc, ten = rec
@@ -175,14 +175,17 @@ def _trace_fused(field: Biaf, x: Arr, f: Arr, n: Arr, params: FieldParams, targe
     tg = np.ascontiguousarray(targets.points, dtype=np.float64)
     reach = np.ascontiguousarray(targets.reach, dtype=np.float64)
     chunk = min(FUSED_CHUNK, params.max_steps)
+    offs = np.linspace(-1.0, 1.0, PC_SAMPLES)
+    la = (S.points, S.tangent, S.outward, S.charge, F.lc * F.lc, float(F.params.ki), F.kernel, F._prune2)
+    fa = F.one_point_args()
     ox, on, of = np.empty((chunk, 3)), np.empty((chunk, 3)), np.empty((chunk, 3))
     ot = np.empty(chunk)
     while True:  # sequential: each chunk continues the line where the last one stopped
         if cancel is not None and cancel():
             raise Cancelled()
-        k, code, hit = lt.simple_chunk(state, start, len(pts), params.max_steps, chunk, float(step), float(floor),
-                                       S.points, S.tangent, S.outward, S.charge, F.lc * F.lc, float(F.params.ki),
-                                       F.kernel, F._prune2, tg, reach, avoid, ox, on, of, ot)
+        k, code, hit = lt.tracer_chunk(state, start, len(pts), params.max_steps, chunk, float(step), float(floor),
+                                       F.full, la, fa, tg, reach, avoid, ox, on, of, ot,
+                                       params.tracer != "simple", float(params.deviation * step), offs)
         pts.extend(ox[:k].copy())
         nrm.extend(on[:k].copy())
         frc.extend(of[:k].copy())

@@ -30,7 +30,12 @@ class FieldParams:
     threshold: float = 0.02  # a line stops as "too weak" when |H n| < threshold * |H n| at its start
     max_steps: int = 2000
     tracer: str = "simple"  # "simple" (2004) or "predictor-corrector" (2010, F4.1)
-    shield_stride: int = 8  # full mode: shielding / q2 tested at every k-th source of a run, 1 = every source
+    shield_stride: int = 32  # full mode: shielding / q2 anchors at most k sources apart along a run, 1 = every source
+    # full mode: anchors of the visibility coherence at most this angle apart seen from X (see indicator._coherent_pass)
+    coherence_deg: float = 10.0
+    # full mode: key points every k-th point of a run of consecutive boundary points; the others take
+    # agreeing verdicts of the two key points around them (see indicator._full_point), 1 = off
+    point_stride: int = 8
 
     def __post_init__(self) -> None:
         def bad(name: str, why: str) -> ValueError:
@@ -62,6 +67,10 @@ class FieldParams:
             raise bad("threshold", "must lie in [0, 1)")
         if not (1 <= self.shield_stride <= 1024) or int(self.shield_stride) != self.shield_stride:
             raise bad("shield_stride", "must be a whole number from 1 to 1024")
+        if not (1 <= self.point_stride <= 1024) or int(self.point_stride) != self.point_stride:
+            raise bad("point_stride", "must be a whole number from 1 to 1024")
+        if not (0 < self.coherence_deg < 90):
+            raise bad("coherence_deg", "must lie strictly between 0 and 90 degrees")
         if not (1 <= self.max_steps <= 10_000_000) or int(self.max_steps) != self.max_steps:
             raise bad("max_steps", "must be a whole number >= 1")
 

@@ -121,3 +121,27 @@ def test_single_point_closed_form_normal_matches_the_eigenvector():
         assert abs(n @ n_ref[0]) == pytest.approx(1.0, abs=1e-9)
         assert n @ hint >= 0 and np.linalg.norm(f) == pytest.approx(ten[0], rel=1e-9)
         np.testing.assert_allclose(f, H @ n, atol=1e-12)
+
+
+def test_full_mode_single_point_path_matches_evaluate():
+    """sample_one in full mode (the tracing step's cached kernel call) gives H of evaluate."""
+    from algorithms.cases import combine, disk
+    from algorithms.field.free_points import free_points
+    from algorithms.field.indicator import _normal_one
+    from algorithms.field.shielding import mesh_bvh
+
+    disks = combine(disk((0, 0, 0)), disk((2.6, 0, 0)))
+    src = sources_from_frames([f for f in loop_frames(disks) if f.island == 1])
+    rng = np.random.default_rng(11)
+    fp = free_points(np.column_stack([rng.uniform(1, 1.6, 30), rng.uniform(-0.5, 0.5, 30), np.zeros(30)]),
+                     kt=0.5, rc=0.15)
+    field = IndicatorField(src, FieldParams(mode="full", lc=0.6), 0.6, bvh=mesh_bvh(disks), free=fp)
+    x = np.column_stack([rng.uniform(1.0, 1.6, 8), rng.uniform(-0.3, 0.3, 8), rng.uniform(-0.1, 0.1, 8)])
+    t, hint = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0])
+    H = field.evaluate(x).H
+    assert np.abs(H).max() > 0
+    for k in range(len(x)):
+        n, f, ten = field.sample_one(x[k], t, hint)
+        n_ref, f_ref = _normal_one(H[k], t, hint)
+        np.testing.assert_allclose(f, f_ref, rtol=1e-12, atol=1e-14)
+        assert ten == pytest.approx(np.linalg.norm(f_ref))

@@ -111,23 +111,70 @@ def test_tiny_meshes(n):
 
 
 def test_visibility_coherence_agrees_with_exact_shielding():
-    """shield_stride > 1 interpolates visibility between far anchors; near sources stay exact."""
+    """Coherence along sources (shield_stride, coherence_deg) and across points (point_stride)
+    interpolates verdicts between exact anchors; stride 1 and point_stride 1 decide every pair."""
     from algorithms.bridges import attraction_index, field_context
     from algorithms.demos import demo
     from algorithms.io import load_model
 
     m = load_model(demo("two-caps", "repair").path)
     om = {}
-    for stride in (1, 8):
-        ctx = field_context(m, FieldParams(mode="full", shield_stride=stride))
-        om[stride] = np.concatenate(attraction_index(ctx)[0])
-    assert om[1].max() > 0
-    np.testing.assert_allclose(om[8], om[1], rtol=0.02, atol=0.02 * om[1].max())
+    for key, kw in (("exact", dict(shield_stride=1, point_stride=1)), ("default", {}),
+                    ("sources only", dict(point_stride=1))):
+        ctx = field_context(m, FieldParams(mode="full", **kw))
+        om[key] = np.concatenate(attraction_index(ctx)[0])
+    assert om["exact"].max() > 0
+    for key in ("default", "sources only"):
+        np.testing.assert_allclose(om[key], om["exact"], rtol=0, atol=0.005 * om["exact"].max())
+
+
+def test_coherence_keeps_a_partial_wall():
+    """A wall that hides part of disk B from part of disk A's boundary: with coherence along
+    sources and across points the field of every point of A's loop stays close to the exact one
+    (every pair tested), and the wall still changes it."""
+    disks = combine(disk((0, 0, 0)), disk((2.6, 0, 0)))
+    fr_a = [f for f in loop_frames(disks) if f.island == 0][0]
+    src = sources_from_frames([f for f in loop_frames(disks) if f.island == 1])
+    n = len(fr_a.vertices)
+    loop, pos = np.zeros(n, dtype=np.int64), np.arange(n)
+    H = {}
+    for name, mesh in (("wall", combine(disks, wall(h=0.35))), ("none", disks)):
+        for key, kw in (("exact", dict(shield_stride=1, point_stride=1)), ("coherent", dict(point_stride=4))):
+            p = FieldParams(mode="full", lc=0.6, **kw)
+            f = IndicatorField(src, p, 0.6, bvh=mesh_bvh(mesh))
+            H[name, key] = f.evaluate(fr_a.points, x_vertex=fr_a.vertices, x_loop=loop, x_pos=pos).H
+    scale = np.abs(H["none", "exact"]).max()
+    changed = np.abs(H["wall", "exact"] - H["none", "exact"]).max(axis=(1, 2)) > 0.05 * scale
+    assert 0 < changed.sum() < n  # the wall hides B from some of A's points, not from all
+    np.testing.assert_allclose(H["wall", "coherent"], H["wall", "exact"], atol=0.02 * scale)
+    np.testing.assert_allclose(H["none", "coherent"], H["none", "exact"], atol=1e-4 * scale)
+
+
+def test_key_points_split_runs_of_consecutive_points():
+    from algorithms.field.indicator import key_points
+
+    loop = np.array([0, 0, 0, 0, 0, 0, 1, 1, 1, -1, -1])
+    pos = np.array([0, 1, 2, 3, 4, 5, 7, 8, 10, 0, 1])
+    krow, n0, n1, p0, p1, wgt, keys, rest = key_points(loop, pos, 4)
+    # runs: [0..5], [6, 7], [8], [9], [10]; keys: 0, 4, 5 | 6, 7 | 8 | 9 | 10
+    np.testing.assert_array_equal(keys, [0, 4, 5, 6, 7, 8, 9, 10])
+    np.testing.assert_array_equal(rest, [1, 2, 3])
+    np.testing.assert_array_equal(p0[rest], [0, 0, 0])
+    np.testing.assert_array_equal(p1[rest], [4, 4, 4])
+    np.testing.assert_allclose(wgt[rest], [0.25, 0.5, 0.75])
+    np.testing.assert_array_equal(krow[keys], np.arange(8))
+    assert np.all(n0[keys] == -1) and np.all(krow[rest] == -1)
+    k1 = key_points(loop, pos, 1)
+    np.testing.assert_array_equal(k1[6], np.arange(11))
 
 
 def test_shield_stride_is_validated():
     with pytest.raises(ValueError, match="parameter shield_stride="):
         FieldParams(shield_stride=0)
+    with pytest.raises(ValueError, match="parameter point_stride="):
+        FieldParams(point_stride=0)
+    with pytest.raises(ValueError, match="parameter coherence_deg="):
+        FieldParams(coherence_deg=90)
 
 
 def test_occluder_hint_changes_no_answer():
@@ -147,3 +194,20 @@ def test_occluder_hint_changes_no_answer():
             hit, occ = segment_blocked_hint(x[i], o[i], -1, -1, *b.arrays(), b.scale, h, stack, work)
             assert hit == ref[i] and (occ >= 0) == hit
         hint = occ if hit else hint
+
+
+def test_coherence_across_points_skips_a_point_off_its_key_points_chord():
+    """Points labelled consecutive along a loop, but the middle one far from its two key points
+    (a hairpin) and hidden behind a wall from which they are not: it is decided by itself."""
+    disks = combine(disk((0, 0, 0)), disk((2.6, 0, 0)))
+    src = sources_from_frames([f for f in loop_frames(disks) if f.island == 1])
+    v = np.array([[1.2, -3, 0.5], [1.2, 3, 0.5], [1.2, 3, 2.5], [1.2, -3, 2.5]], dtype=float)
+    high_wall = Mesh(v, np.array([[0, 1, 2], [0, 2, 3]]))  # hides B from z ~ 1.5, not from z = 0
+    x = np.array([[1.0, 0.005, 0.0], [1.0, 0.0, 1.5], [1.0, -0.005, 0.0]])
+    loop, pos = np.zeros(3, dtype=np.int64), np.arange(3)
+    H = {}
+    for key, kw in (("exact", dict(shield_stride=1, point_stride=1)), ("coherent", dict(point_stride=2))):
+        f = IndicatorField(src, FieldParams(mode="full", lc=0.6, **kw), 0.6, bvh=mesh_bvh(combine(disks, high_wall)))
+        H[key] = f.evaluate(x, x_loop=loop, x_pos=pos).H
+    assert np.abs(H["exact"][0]).max() > 0.1 and np.abs(H["exact"][1]).max() == 0.0
+    np.testing.assert_allclose(H["coherent"], H["exact"], rtol=1e-9, atol=1e-12)

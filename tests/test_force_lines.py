@@ -184,14 +184,16 @@ class _PythonLoop:
         return self.f.attraction(*a)
 
 
+@pytest.mark.parametrize("mode", ["light", "full"])
+@pytest.mark.parametrize("tracer", ["simple", "predictor-corrector"])
 @pytest.mark.parametrize("kernel,lc,max_steps", [("gauss", 0.6, 2000), ("cauchy", 1.0, 2000), ("gauss", 0.6, 7)])
-def test_fused_light_tracer_is_the_python_loop(disks, kernel, lc, max_steps):
-    """The numba simple tracer (field/light_tracer.py) records the same line, status and end
-    as trace's Python loop: arrivals, stalls and the step limit."""
+def test_fused_tracer_is_the_python_loop(disks, kernel, lc, max_steps, tracer, mode):
+    """The numba tracers (field/light_tracer.py) record the same line, status and end as trace's
+    Python loop: arrivals, stalls and the step limit."""
     from algorithms.bridges import _trace_unit, _unit_tools
     from algorithms.records import STEP_LIMIT
 
-    p = FieldParams(mode="light", q1_kernel=kernel, lc=lc, step=0.05, max_steps=max_steps)
+    p = FieldParams(mode=mode, q1_kernel=kernel, lc=lc, step=0.05, max_steps=max_steps, tracer=tracer)
     ctx = field_context(disks, p)
     li = [k for k, fr in enumerate(ctx.frames) if fr.island == 0][0]
     field, tg, avoid = _unit_tools(ctx, int(ctx.unit[li]), ctx.params)
@@ -206,6 +208,12 @@ def test_fused_light_tracer_is_the_python_loop(disks, kernel, lc, max_steps):
             np.testing.assert_allclose(u, v, rtol=1e-9, atol=1e-12)
         statuses.add(a.status)
         assert _trace_unit(ctx, li, k, ctx.params, (field, tg, avoid)).status == a.status
+    if mode == "full":  # shielding: the simple tracer's lines all arrive for both kernels (spec §5)
+        assert tracer != "simple" or statuses == ({STEP_LIMIT} if max_steps == 7 else {ARRIVED})
+        return
+    if tracer == "predictor-corrector":  # the same endings as the simple tracer's, not always the same lines
+        assert statuses == {STEP_LIMIT} if max_steps == 7 else (ARRIVED if kernel == "gauss" else STALLED) in statuses
+        return
     assert statuses == {ARRIVED} if max_steps > 7 and kernel == "gauss" else statuses <= {ARRIVED, STALLED, STEP_LIMIT}
     if max_steps == 7:
         assert statuses == {STEP_LIMIT}

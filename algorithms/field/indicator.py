@@ -35,6 +35,8 @@ Arr = NDArray[np.float64]
 PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: relative weight below which a Gaussian source is skipped
 NO_GROUP = -2  # a point that excludes no group of sources
 SERIAL_BELOW = 16  # fewer points than this: one thread (a tracing step)
+CHORD_SLACK = 1.25  # coherence across points only for a point near the chord of its key points
+KEY_MEMORY = 32_000_000  # bytes of key-point verdicts per chunk in full mode (the chunk shrinks to fit)
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,62 +176,186 @@ def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, s
 
 
 @numba.njit(cache=True)
-def _pair_eval(xi, xvi, j, o, ov, shield, bv, use_fp, gr, lim, hint, stack, work):
-    """(visible, q2 / L, occluder) of the pair X -> source j: free points (4), then shielding (15).
-
-    q2 comes first: a pair whose effective length is still beyond the pruning limit (q2^2 > lim,
-    its weight below exp(-16) of the nearest source's, the rule of the candidate pass) is dropped
-    without the costly segment test. hint: the last occluder found from X (tested first; the
-    returned occluder is the new hint). bv: the BVH arrays and scale; gr: the free-point lattice
-    arguments of q2_lattice; stack, work: the traversal's scratch arrays."""
-    ratio = 1.0
-    if use_fp:
-        r0 = o[j, 0] - xi[0]
-        r1 = o[j, 1] - xi[1]
-        r2 = o[j, 2] - xi[2]
-        length = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
-        q2 = q2_lattice_capped(xi, o[j], length, gr[0], gr[1], gr[2], gr[3], np.sqrt(lim))  # (4)
-        if q2 * q2 > lim:
-            return False, 1.0, hint  # negligible weight: pruned like the candidate pass does
-        ratio = q2 / length
-    if shield:
-        hit, occ = segment_blocked_hint(xi, o[j], xvi, ov[j], bv[0], bv[1], bv[2], bv[3], bv[4], bv[5], bv[6],
-                                        bv[7], hint, stack, work)
-        if hit:
-            return False, 1.0, occ  # (15) delta_XO = 0
-    return True, ratio, hint
+def _q2_ratio(xi, oj, gr, cap):
+    """(4) q2 / L of the segment X -> O (cap: q2_lattice_capped's; 1e300 = exact)."""
+    r0 = oj[0] - xi[0]
+    r1 = oj[1] - xi[1]
+    r2 = oj[2] - xi[2]
+    length = np.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+    return q2_lattice_capped(xi, oj, length, gr[0], gr[1], gr[2], gr[3], cap) / length
 
 
 # reassociation etc. for the sums, but no "no-inf / no-nan" assumptions (inf marks "no source")
 FAST = {"nsz", "arcp", "contract", "afn", "reassoc"}
-COS_COHERENT = np.cos(np.radians(10.0))  # anchors closer than this angle seen from X may be interpolated
 
 
 @numba.njit(cache=True)
-def _narrow(x, oa, ob):
-    """Do oa and ob subtend less than 10 degrees at x? (only then is coherence trusted)"""
+def _narrow(x, oa, ob, cos2):
+    """Do oa and ob subtend at most the coherence angle at x (cos2 = its squared cosine)?"""
     a0, a1, a2 = oa[0] - x[0], oa[1] - x[1], oa[2] - x[2]
     b0, b1, b2 = ob[0] - x[0], ob[1] - x[1], ob[2] - x[2]
     dot = a0 * b0 + a1 * b1 + a2 * b2
     na = a0 * a0 + a1 * a1 + a2 * a2
     nb = b0 * b0 + b1 * b1 + b2 * b2
-    return dot > 0 and dot * dot > COS_COHERENT * COS_COHERENT * na * nb
+    return dot > 0 and dot * dot >= cos2 * na * nb
+
+
+@numba.njit(cache=True)
+def _run_end(cand, sel, k, ns, sloop):
+    """End (exclusive) of the run of consecutive sources of one loop starting at sel[k]."""
+    e = k + 1
+    while e < ns and cand[sel[e]] == cand[sel[e - 1]] + 1 and sloop[cand[sel[e]]] == sloop[cand[sel[k]]]:
+        e += 1
+    return e
+
+
+@numba.njit(cache=True)
+def _next_anchor(xi, o, cand, sel, a, e, stride, cos2):
+    """The next anchor after sel[a] in a run ending at e: the farthest source at most ``stride``
+    positions on whose direction from X is within the coherence angle of sel[a]'s (at least the
+    next source, so a near source, whose neighbours subtend more than that angle, is exact)."""
+    hi = min(a + stride, e - 1)
+    bnd = a + 1
+    oa = o[cand[sel[a]]]
+    while bnd < hi and _narrow(xi, oa, o[cand[sel[bnd + 1]]], cos2):
+        bnd += 1
+    return bnd
+
+
+@numba.njit(cache=True)
+def _q2_pass(xi, cand, sel, ns, o, sloop, kept, ratio, stride, cos2, gr, lim):
+    """(4) q2 / L for the candidates sel[:ns], and kept[c] = False where q2^2 > lim (the pair's
+    weight is still below exp(-16) of the nearest source's after the free points shorten it:
+    pruned like the candidate pass). With visibility coherence (FieldParams.shield_stride,
+    coherence_deg): q2 / L is computed at anchors (_next_anchor) and interpolated linearly in
+    between, and the pruning rule is then applied to the interpolated q2 (an error there only
+    concerns weights near exp(-16)). The anchors' q2 sum stops once it is certainly beyond the
+    limit; where both anchors are, the sources in between are pruned; where only one is, its q2
+    is completed."""
+    cap = np.sqrt(lim)
+    k = 0
+    while k < ns:
+        e = _run_end(cand, sel, k, ns, sloop)
+        a = k
+        oa = o[cand[sel[a]]]
+        ra = _q2_ratio(xi, oa, gr, cap)
+        exact_a = ra * np.sqrt(_d2(xi, oa)) <= cap  # else the capped sum stopped early: a lower bound
+        kept[sel[a]] = exact_a
+        ratio[sel[a]] = ra
+        while a < e - 1:
+            bnd = _next_anchor(xi, o, cand, sel, a, e, stride, cos2)
+            ob = o[cand[sel[bnd]]]
+            rb = _q2_ratio(xi, ob, gr, cap)
+            exact_b = rb * np.sqrt(_d2(xi, ob)) <= cap
+            kept[sel[bnd]] = exact_b
+            if bnd > a + 1:
+                if not exact_a and not exact_b:
+                    for t in range(a + 1, bnd):
+                        kept[sel[t]] = False
+                else:
+                    if not exact_a:
+                        ra = _q2_ratio(xi, o[cand[sel[a]]], gr, 1e300)
+                    if not exact_b:
+                        rb = _q2_ratio(xi, ob, gr, 1e300)
+                    exact_b = True
+                    for t in range(a + 1, bnd):
+                        r = ra + (rb - ra) * (t - a) / (bnd - a)
+                        ratio[sel[t]] = r
+                        q2 = r * np.sqrt(_d2(xi, o[cand[sel[t]]]))
+                        kept[sel[t]] = q2 * q2 <= lim
+            ratio[sel[bnd]] = rb
+            a = bnd
+            ra = rb
+            exact_a = exact_b
+        k = e
+
+
+@numba.njit(cache=True, inline="always")
+def _d2(x, y):
+    r0, r1, r2 = y[0] - x[0], y[1] - x[1], y[2] - x[2]
+    return r0 * r0 + r1 * r1 + r2 * r2
+
+
+@numba.njit(cache=True)
+def _shield_pass(xi, xvi, cand, sel, ns, o, ov, sloop, vis, stride, cos2, bv, stack, work, istack):
+    """(15) vis[sel[:ns]] = delta_XO, with visibility coherence (FieldParams.shield_stride,
+    coherence_deg): anchors along each run of consecutive sources (_next_anchor) are tested
+    exactly; between two tested sources that agree, the sources in between take their verdict;
+    where they disagree the middle source is tested and both halves are treated the same way
+    (bisection: a change of visibility costs O(log stride) segment tests). stride = 1 is exact.
+    The last occluder found from X is tried first for the next segment."""
+    occ = -1
+    k = 0
+    while k < ns:
+        e = _run_end(cand, sel, k, ns, sloop)
+        a = k
+        ca = sel[a]
+        hit, occ = segment_blocked_hint(xi, o[cand[ca]], xvi, ov[cand[ca]], bv[0], bv[1], bv[2], bv[3], bv[4],
+                                        bv[5], bv[6], bv[7], occ, stack, work)
+        vis[ca] = not hit
+        while a < e - 1:
+            bnd = _next_anchor(xi, o, cand, sel, a, e, stride, cos2)
+            cb = sel[bnd]
+            hit, occ = segment_blocked_hint(xi, o[cand[cb]], xvi, ov[cand[cb]], bv[0], bv[1], bv[2], bv[3], bv[4],
+                                            bv[5], bv[6], bv[7], occ, stack, work)
+            vis[cb] = not hit
+            istack[0] = a
+            istack[1] = bnd
+            top = 1
+            while top > 0:  # bisection of [lo, up] between tested ends
+                top -= 1
+                lo = istack[2 * top]
+                up = istack[2 * top + 1]
+                if up - lo <= 1:
+                    continue
+                cl, cu = sel[lo], sel[up]
+                if vis[cl] == vis[cu]:
+                    for t in range(lo + 1, up):
+                        vis[sel[t]] = vis[cl]
+                    continue
+                mid = (lo + up) // 2
+                cm = sel[mid]
+                hit, occ = segment_blocked_hint(xi, o[cand[cm]], xvi, ov[cand[cm]], bv[0], bv[1], bv[2], bv[3],
+                                                bv[4], bv[5], bv[6], bv[7], occ, stack, work)
+                vis[cm] = not hit
+                istack[2 * top] = lo
+                istack[2 * top + 1] = mid
+                istack[2 * top + 2] = mid
+                istack[2 * top + 3] = up
+                top += 2
+            a = bnd
+        k = e
+
+
+@numba.njit(cache=True, inline="always")
+def _verdict_class(v):
+    """A key point's verdict as a class: 0 negligible (-1 or 0), 1 visible, 2 shielded, -1 none."""
+    if v == -2:
+        return -1
+    return max(v, 0)
 
 
 @numba.njit(cache=True, fastmath=FAST)
 def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2, stride,
+                lc2, ki, kernel, prune2, shrink2, stride, cos2,
                 shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
                 scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
+                krow, n0, n1, p0, p1, wgt, kv, kr,
                 out_h, out_near, out_dist, out_pairs):
     """Full mode (M2) at point i: shielding delta (15) and q12 = q1(q2) with free points (4, 8).
 
-    Visibility coherence (choice, documented): along a run of consecutive sources of one loop,
-    delta and q2/L are evaluated exactly at every ``stride``-th source; between two such anchors
-    that agree (both visible or both shielded) and subtend less than 10 degrees at X, delta is
-    taken from them and q2/L interpolated linearly; otherwise every source in between is tested.
-    So near sources (large angles) are always exact; stride = 1 is exact everywhere.
+    The pairs kept by the Gaussian pruning are decided in two passes with visibility coherence:
+    first q2 (_q2_pass, free points), which drops the pairs still negligible after the free points
+    shorten them, then shielding (_shield_pass) of the rest. stride = 1 is exact everywhere.
+
+    Coherence across points (FieldParams.point_stride): a key point (krow[i] >= 0) records its
+    verdict per source in kv[krow[i]] (-2 excluded, -1 negligible by the candidate bound, 0 pruned
+    by q2, 1 visible, 2 shielded) and q2 / L in kr; a point between two key points of its loop
+    (rows n0[i], n1[i], points p0[i], p1[i], weight wgt[i] of the second) takes a source's verdict
+    from them when both agree (-1 and 0 count as one verdict: negligible) and the two key points
+    subtend at most the coherence angle at the source, q2 / L interpolated; only the other pairs
+    are decided by the passes.
     """
     m = o.shape[0]
     xi = x[i]
@@ -237,17 +363,20 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     gr = (g_origin, g_cell, g_dims, g_lattice)
     best = 1e300
     bj = -1
+    plain = xgrp[i] == NO_GROUP and xwin[i] < 0  # no source excluded: the loops below skip the tests
+    x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
     for j in range(m):  # pass 1: the nearest admissible source
-        if sgrp[j] == xgrp[i]:
-            continue
-        if xwin[i] >= 0 and sloop[j] == xloop[i]:
-            dp = abs(spos[j] - xpos[i])
-            dp = min(dp, slen[j] - dp)
-            if dp <= xwin[i]:
+        if not plain:
+            if sgrp[j] == xgrp[i]:
                 continue
-        r0 = o[j, 0] - x[i, 0]
-        r1 = o[j, 1] - x[i, 1]
-        r2 = o[j, 2] - x[i, 2]
+            if xwin[i] >= 0 and sloop[j] == xloop[i]:
+                dp = abs(spos[j] - xpos[i])
+                dp = min(dp, slen[j] - dp)
+                if dp <= xwin[i]:
+                    continue
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
         l2 = r0 * r0 + r1 * r1 + r2 * r2
         if l2 < best:
             best = l2
@@ -255,56 +384,87 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     # pass 2: the candidates, pruned relative to the nearest source:
     # (L * shrink)^2 - best > prune2, shrink = 1 / (1 + G(0)) in full mode with free points
     cand = np.empty(m, dtype=np.int64)
+    cl2 = np.empty(m)  # squared distances of the candidates
     nc = 0
+    row = krow[i]
+    if row >= 0:
+        for j in range(m):
+            kv[row, j] = -2  # excluded
     for j in range(m):
-        if sgrp[j] == xgrp[i]:
-            continue
-        if xwin[i] >= 0 and sloop[j] == xloop[i]:
-            dp = abs(spos[j] - xpos[i])
-            dp = min(dp, slen[j] - dp)
-            if dp <= xwin[i]:
+        if not plain:
+            if sgrp[j] == xgrp[i]:
                 continue
-        r0 = o[j, 0] - x[i, 0]
-        r1 = o[j, 1] - x[i, 1]
-        r2 = o[j, 2] - x[i, 2]
+            if xwin[i] >= 0 and sloop[j] == xloop[i]:
+                dp = abs(spos[j] - xpos[i])
+                dp = min(dp, slen[j] - dp)
+                if dp <= xwin[i]:
+                    continue
+        r0 = o[j, 0] - x0
+        r1 = o[j, 1] - x1
+        r2 = o[j, 2] - x2
         l2 = r0 * r0 + r1 * r1 + r2 * r2
         if l2 * shrink2 - best > prune2 or l2 < 1e-300:
+            if row >= 0:
+                kv[row, j] = -1  # negligible whatever the free points
             continue
         cand[nc] = j
+        cl2[nc] = l2
         nc += 1
     vis = np.ones(nc, dtype=np.bool_)
     ratio = np.ones(nc)
     lim = best + prune2  # q2^2 beyond this: weight below exp(-16) of the nearest source's
-    occ = -1  # the last occluding triangle (tested first for the next segment from X)
     stack = np.empty(64, dtype=np.int64)  # BVH traversal scratch, once per point
     work = np.empty((2, 3))
-    k = 0
-    while k < nc:  # runs of consecutive sources of one loop
-        e = k + 1
-        while e < nc and cand[e] == cand[e - 1] + 1 and sloop[cand[e]] == sloop[cand[k]]:
-            e += 1
-        a = k
-        va, ra, occ = _pair_eval(xi, xv[i], cand[a], o, ov, shield, bv, use_fp, gr, lim, occ, stack, work)
-        vis[a] = va
-        ratio[a] = ra
-        while a < e - 1:
-            bb = min(a + stride, e - 1)
-            vb, rb, occ = _pair_eval(xi, xv[i], cand[bb], o, ov, shield, bv, use_fp, gr, lim, occ, stack, work)
-            vis[bb] = vb
-            ratio[bb] = rb
-            if vb == va and _narrow(xi, o[cand[a]], o[cand[bb]]):
-                for t in range(a + 1, bb):
-                    vis[t] = va
-                    ratio[t] = ra + (rb - ra) * (t - a) / (bb - a)
+    istack = np.empty(128, dtype=np.int64)  # bisection intervals
+    sel = np.empty(nc, dtype=np.int64)
+    ns = 0
+    ra, rb = n0[i], n1[i]
+    dab = np.sqrt(_d2(x[p0[i]], x[p1[i]])) if ra >= 0 else 0.0
+    da, db = (np.sqrt(_d2(xi, x[p0[i]])), np.sqrt(_d2(xi, x[p1[i]]))) if ra >= 0 else (0.0, 0.0)
+    # coherence across points, when X lies near the chord of its two key points Xa, Xb (not at a
+    # sharp corner of the loop between them): |X - Xa| + |X - Xb| <= CHORD_SLACK |Xa - Xb|
+    if ra >= 0 and (use_fp or shield) and da + db <= CHORD_SLACK * dab:
+        # Xa, Xb subtend at most the coherence angle theta at a source O when
+        # |Xa - Xb| <= sin(theta) min(|O - Xa|, |O - Xb|) (law of sines), which holds when
+        # |O - X| >= |Xa - Xb| (1 / sin(theta) + CHORD_SLACK), as |O - Xa| >= |O - X| - |X - Xa|
+        w = wgt[i]
+        sin_t = np.sqrt(1.0 - cos2)
+        thr2 = (dab * (1.0 / sin_t + CHORD_SLACK)) ** 2
+        for c in range(nc):
+            j = cand[c]
+            va = _verdict_class(kv[ra, j])
+            vb = _verdict_class(kv[rb, j])
+            if va >= 0 and va == vb and cl2[c] >= thr2:
+                vis[c] = va == 1
+                ratio[c] = kr[ra, j] * (1.0 - w) + kr[rb, j] * w
             else:
-                for t in range(a + 1, bb):
-                    vt, rt, occ = _pair_eval(xi, xv[i], cand[t], o, ov, shield, bv, use_fp, gr, lim, occ, stack, work)
-                    vis[t] = vt
-                    ratio[t] = rt
-            a = bb
-            va = vb
-            ra = rb
-        k = e
+                sel[ns] = c
+                ns += 1
+    else:
+        for c in range(nc):
+            sel[c] = c
+        ns = nc
+    if use_fp:  # (4): q2 / L, and the pairs still negligible after the free points are dropped
+        _q2_pass(xi, cand, sel, ns, o, sloop, vis, ratio, stride, cos2, gr, lim)
+    if row >= 0:
+        for t in range(ns):
+            if not vis[sel[t]]:
+                kv[row, cand[sel[t]]] = 0  # pruned by q2
+    if shield:  # (15) for the pairs kept
+        nk = 0
+        for t in range(ns):
+            if vis[sel[t]]:
+                sel[nk] = sel[t]
+                nk += 1
+        _shield_pass(xi, xv[i], cand, sel, nk, o, ov, sloop, vis, stride, cos2, bv, stack, work, istack)
+        ns = nk
+    if row >= 0:
+        for t in range(ns):
+            c = sel[t]
+            j = cand[c]
+            if kv[row, j] != 0:
+                kv[row, j] = 1 if vis[c] else 2
+                kr[row, j] = ratio[c]
     h00 = h01 = h02 = h10 = h11 = h12 = h20 = h21 = h22 = 0.0  # scalars: kept in registers
     for c in range(nc):
         if not vis[c]:
@@ -345,34 +505,40 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
 
 @numba.njit(cache=True, parallel=True)
 def _field_full(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2, stride,
+                lc2, ki, kernel, prune2, shrink2, stride, cos2,
                 shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
                 scale,
                 use_fp, g_origin, g_cell, g_dims, g_lattice,
+                krow, n0, n1, p0, p1, wgt, kv, kr, sub,
                 out_h, out_near, out_dist, out_pairs):
-    for i in numba.prange(x.shape[0]):
+    for s in numba.prange(len(sub)):
+        i = sub[s]
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
-                scale,
-                use_fp, g_origin, g_cell, g_dims, g_lattice,
-                out_h, out_near, out_dist, out_pairs)
+                    lc2, ki, kernel, prune2, shrink2, stride, cos2,
+                    shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
+                    scale,
+                    use_fp, g_origin, g_cell, g_dims, g_lattice,
+                    krow, n0, n1, p0, p1, wgt, kv, kr,
+                    out_h, out_near, out_dist, out_pairs)
 
 
 @numba.njit(cache=True)
 def _field_full_serial(x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
-                scale,
-                use_fp, g_origin, g_cell, g_dims, g_lattice,
-                out_h, out_near, out_dist, out_pairs):
-    for i in range(x.shape[0]):
+                       lc2, ki, kernel, prune2, shrink2, stride, cos2,
+                       shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
+                       scale,
+                       use_fp, g_origin, g_cell, g_dims, g_lattice,
+                       krow, n0, n1, p0, p1, wgt, kv, kr, sub,
+                       out_h, out_near, out_dist, out_pairs):
+    for s in range(len(sub)):
+        i = sub[s]
         _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop, spos, slen,
-                lc2, ki, kernel, prune2, shrink2, stride,
-                shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
-                scale,
-                use_fp, g_origin, g_cell, g_dims, g_lattice,
-                out_h, out_near, out_dist, out_pairs)
+                    lc2, ki, kernel, prune2, shrink2, stride, cos2,
+                    shield, node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal,
+                    scale,
+                    use_fp, g_origin, g_cell, g_dims, g_lattice,
+                    krow, n0, n1, p0, p1, wgt, kv, kr,
+                    out_h, out_near, out_dist, out_pairs)
 
 
 @dataclass(frozen=True)
@@ -526,6 +692,37 @@ class IndicatorField:
         self.prune = PRUNE_GAUSS * self.lc if self.kernel == 0 else np.inf
         self.shrink = 1.0 / (1.0 + gmax)
         self._prune2 = min(self.prune * self.prune, 1e300) if np.isfinite(self.prune) else 1e300
+        self._one: tuple | None = None  # full mode, one point: the kernel's arguments, made once
+
+    def _full_args(self) -> tuple:
+        """The arguments of _field_full after the points' own arrays (sources, parameters, BVH,
+        lattice), up to the coherence-across-points arrays."""
+        S, p, bvh = self.sources, self.params, self.bvh
+        barr = bvh.arrays() if bvh is not None else _EMPTY_BVH
+        garr = lattice_args(self.free) if self.free is not None else _EMPTY_GRID
+        return (S.points, S.vertex, S.tangent, S.outward, S.charge, S.group, S.loop, S.pos, S.loop_len,
+                self.lc * self.lc, float(p.ki), self.kernel, self._prune2, self.shrink ** 2, int(p.shield_stride),
+                float(np.cos(np.radians(p.coherence_deg)) ** 2), self.shield, *barr,
+                bvh.scale if bvh is not None else 1.0, self.free is not None, *garr)
+
+    def one_point_args(self) -> tuple:
+        """The arguments of _field_full_serial for one point with no exclusions (a tracing step),
+        up to the outputs; made once."""
+        if self._one is None:
+            one = np.full(1, -1, dtype=np.int64)
+            pts = (one, np.full(1, NO_GROUP, dtype=np.int64), one, np.zeros(1, dtype=np.int64), one)
+            coh = (one, one, one, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1),
+                   np.zeros((0, len(self.sources)), dtype=np.int8), np.zeros((0, len(self.sources))),
+                   np.zeros(1, dtype=np.int64))
+            self._one = (*pts, *self._full_args(), *coh)
+        return self._one
+
+    def _full_one(self, x: Arr) -> Arr:
+        """Full-mode H (3, 3) at one point, no exclusions, no per-call set-up (a tracing step)."""
+        H = np.zeros((1, 9))
+        _field_full_serial(np.asarray(x, dtype=np.float64).reshape(1, 3), *self.one_point_args(), H,
+                           np.zeros(1, dtype=np.int64), np.zeros(1), np.zeros(1, dtype=np.int64))
+        return H.reshape(3, 3)
 
     def sample_one(self, x: Arr, tangent: Arr, hint: Arr) -> tuple[Arr, Arr, float]:
         """One point, no exclusions (a tracing step): (n, F = H n, |F|) with n from (16b)."""
@@ -537,8 +734,9 @@ class IndicatorField:
                                  np.asarray(hint, dtype=np.float64), S.points, S.tangent, S.outward, S.charge,
                                  self.lc * self.lc, float(self.params.ki), self.kernel, self._prune2)
             return n, f, float(np.sqrt(f @ f))
-        ev = self.evaluate(np.asarray(x, dtype=np.float64).reshape(1, 3))
-        n, f = _normal_one(ev.H[0], np.asarray(tangent, dtype=np.float64), np.asarray(hint, dtype=np.float64))
+        if len(self.sources) == 0:
+            return np.asarray(hint, dtype=np.float64), np.zeros(3), 0.0
+        n, f = _normal_one(self._full_one(x), np.asarray(tangent, dtype=np.float64), np.asarray(hint, dtype=np.float64))
         return n, f, float(np.sqrt(f @ f))
 
     @property
@@ -550,8 +748,9 @@ class IndicatorField:
                  x_window: NDArray[np.int64] | None = None) -> Evaluation:
         """H(X) at points x (N, 3). x_group: sources of that group are excluded for each point;
         x_loop / x_pos / x_window: sources of the same loop within x_window positions of x_pos are
-        excluded (-1 = no window). x_vertex: the mesh vertex each point is (shielding ignores its
-        triangles; -1 for a free point)."""
+        excluded (-1 = no window); in full mode they also say which points are consecutive along a
+        loop (coherence across points, FieldParams.point_stride). x_vertex: the mesh vertex each
+        point is (shielding ignores its triangles; -1 for a free point)."""
         x = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(-1, 3))
         n = len(x)
 
@@ -571,26 +770,67 @@ class IndicatorField:
         p = self.params
         if n == 0 or len(S) == 0:
             return Evaluation(H.reshape(n, 3, 3), near, dist, 0)
-        for a in range(0, n, self.chunk):
-            sl = slice(a, min(a + self.chunk, n))
+        chunk = self.chunk
+        if self.full:  # the key points' verdicts take 9 bytes per key point x source: at most KEY_MEMORY
+            chunk = min(chunk, max(256, KEY_MEMORY // (9 * len(S)) * int(p.point_stride)))
+        for a in range(0, n, chunk):
+            sl = slice(a, min(a + chunk, n))
             if not self.full:
                 lk: Any = _field_light if sl.stop - sl.start >= SERIAL_BELOW else _field_light_serial
                 lk(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
                    S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2, H[sl], near[sl], dist[sl])
                 pairs += (sl.stop - sl.start) * len(S)
             else:
-                bvh = self.bvh
-                barr = bvh.arrays() if bvh is not None else _EMPTY_BVH
-                garr = lattice_args(self.free) if self.free is not None else _EMPTY_GRID
-                cnt = np.zeros(sl.stop - sl.start, dtype=np.int64)
-                fk: Any = _field_full if sl.stop - sl.start >= SERIAL_BELOW else _field_full_serial
-                fk(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.vertex, S.tangent, S.outward,
-                   S.charge, S.group, S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2,
-                   self.shrink ** 2, int(p.shield_stride),
-                   self.shield, *barr, bvh.scale if bvh is not None else 1.0,
-                   self.free is not None, *garr, H[sl], near[sl], dist[sl], cnt)
+                args = self._full_args()
+                nn = sl.stop - sl.start
+                cnt = np.zeros(nn, dtype=np.int64)
+                coh = key_points(xl[sl], xp[sl], int(p.point_stride) if (self.shield or self.free) else 1)
+                krow, n0, n1, p0, p1, wgt, keys, rest = coh
+                kv = np.empty((len(keys) if n0.max(initial=-1) >= 0 else 0, len(S)), dtype=np.int8)
+                kr = np.empty(kv.shape)
+                fk: Any = _field_full if nn >= SERIAL_BELOW else _field_full_serial
+                for sub in (keys, rest):  # the key points first: the others read their verdicts
+                    if len(sub) == 0:
+                        continue
+                    fk(x[sl], xv[sl], xg[sl], xl[sl], xp[sl], xw[sl], *args,
+                       krow if len(kv) else np.full(nn, -1, dtype=np.int64),
+                       n0, n1, p0, p1, wgt, kv, kr, sub, H[sl], near[sl], dist[sl], cnt)
                 pairs += int(cnt.sum())
         return Evaluation(H.reshape(n, 3, 3), near, dist, pairs)
+
+
+def key_points(loop: NDArray[np.int64], pos: NDArray[np.int64], stride: int) -> tuple:
+    """Coherence across points (full mode, FieldParams.point_stride): the points that are
+    consecutive positions of one loop (loop[i] >= 0, pos[i] = pos[i - 1] + 1) form runs; in each
+    run every stride-th point and the last are key points, decided pair by pair; each other
+    point lies between two key points of its run. Returns (krow: row of each key point or -1,
+    n0, n1: rows of the two key points around each other point (-1 for key points), p0, p1: their
+    point indices, wgt: the second one's interpolation weight, keys, rest: point indices)."""
+    n = len(loop)
+    krow = np.full(n, -1, dtype=np.int64)
+    n0 = np.full(n, -1, dtype=np.int64)
+    n1 = np.full(n, -1, dtype=np.int64)
+    p0 = np.zeros(n, dtype=np.int64)
+    p1 = np.zeros(n, dtype=np.int64)
+    wgt = np.zeros(n)
+    if stride <= 1 or n < 3:
+        return krow, n0, n1, p0, p1, wgt, np.arange(n, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    cont = np.zeros(n, dtype=bool)
+    cont[1:] = (loop[1:] >= 0) & (loop[1:] == loop[:-1]) & (pos[1:] == pos[:-1] + 1)
+    start = np.maximum.accumulate(np.where(~cont, np.arange(n), 0))  # first point of each one's run
+    end = np.zeros(n, dtype=bool)
+    end[:-1] = ~cont[1:]
+    end[-1] = True
+    key = ((np.arange(n) - start) % stride == 0) | end
+    keys = np.flatnonzero(key)
+    krow[keys] = np.arange(len(keys))
+    rest = np.flatnonzero(~key)
+    k = np.searchsorted(keys, rest)  # keys[k - 1] < i < keys[k], both in i's run (its start and end are keys)
+    a, b = keys[k - 1], keys[k]
+    p0[rest], p1[rest] = a, b
+    n0[rest], n1[rest] = krow[a], krow[b]
+    wgt[rest] = (rest - a) / (b - a)
+    return krow, n0, n1, p0, p1, wgt, keys, rest
 
 
 _EMPTY_BVH = (np.zeros((0, 6)), np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64),

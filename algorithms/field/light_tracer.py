@@ -1,4 +1,6 @@
-"""The simple tracer (spec/repair.md §5, 2004) fused into one numba loop for the light-mode BIAF.
+"""The tracers (spec/repair.md §5: simple, 2004; predictor-corrector, 2010 F4.1) fused into one
+numba loop for the BIAF (light mode, and full mode with shielding and free points). The module
+keeps its name from when it served light mode only.
 
 force_lines.trace runs the same steps in Python against any field of the protocol; with a
 light-mode IndicatorField each step there costs ~150 us of Python (sample -> evaluate -> normal
@@ -15,7 +17,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .indicator import _sample_light
+from .indicator import _field_full_serial, _normal_one, _sample_light
 
 CONTINUE, ARRIVED_C, TURNED_BACK_C, TOO_WEAK_C, STALLED_C, STEP_LIMIT_C = 0, 1, 2, 3, 4, 5
 
@@ -60,9 +62,47 @@ def _near_any(x, pts, radius):
 
 
 @numba.njit(cache=True)
-def simple_chunk(state, start, n_rec, max_steps, chunk, step, floor, o, tau, b, h, lc2, ki, kernel, prune2,
-                 tg, reach, avoid, out_x, out_n, out_f, out_t):
-    """Up to `chunk` steps of the simple tracer X_{k+1} = X_k + s F_k / |F_k| with n from (16b).
+def _sample(x, t, hint, full, la, fa):
+    """(n, F = H n) at x with n from (16b) (n . t = 0, n . hint >= 0): light mode from la (the
+    arguments of _sample_light after (x, t, hint)), full mode from fa (IndicatorField.one_point_args:
+    shielding and free points for one point, as IndicatorField.sample_one)."""
+    if full:
+        hm = np.zeros((1, 9))
+        _field_full_serial(x.reshape((1, 3)), *fa, hm, np.zeros(1, dtype=np.int64), np.zeros(1),
+                           np.zeros(1, dtype=np.int64))
+        return _normal_one(hm.reshape((3, 3)), t, hint)
+    return _sample_light(x, t, hint, la[0], la[1], la[2], la[3], la[4], la[5], la[6], la[7])
+
+
+@numba.njit(cache=True)
+def _corrected(x, p, n, step, dev, offs, full, la, fa):
+    """2010 F4.1: the predictor P1' = X + s p, its normal N1' (16b), and among the points
+    P1' + (d o) N1' (o in offs) the one of maximum potential |H n| (the first one on ties; at
+    o = 0 the predictor's own tension), as force_lines.trace's Python loop does."""
+    pred = x + step * p
+    n1, f1 = _sample(pred, p, n, full, la, fa)
+    zero = np.zeros(3)
+    best = -1.0
+    out = pred
+    for q in range(offs.shape[0]):
+        c = pred + (dev * offs[q]) * n1
+        if abs(offs[q]) < 1e-12:
+            psi = np.sqrt(f1[0] * f1[0] + f1[1] * f1[1] + f1[2] * f1[2])
+        else:
+            _, fc = _sample(c, p, zero, full, la, fa)
+            psi = np.sqrt(fc[0] * fc[0] + fc[1] * fc[1] + fc[2] * fc[2])
+        if psi > best:
+            best = psi
+            out = c
+    return out
+
+
+@numba.njit(cache=True)
+def tracer_chunk(state, start, n_rec, max_steps, chunk, step, floor, full, la, fa,
+                 tg, reach, avoid, out_x, out_n, out_f, out_t, pc, dev, offs):
+    """Up to `chunk` steps of the simple tracer X_{k+1} = X_k + s F_k / |F_k| (pc False) or of the
+    predictor-corrector (pc True: deviation dev, offsets offs along the predicted normal), with n
+    from (16b) at each new point, in the BIAF of la (light mode) or fa (full mode, full True).
 
     state (3, 3): rows x, F, n of the last recorded point (updated in place); n_rec: points
     recorded so far. Writes the new points, normals, forces, tensions into out_*; returns
@@ -78,16 +118,19 @@ def simple_chunk(state, start, n_rec, max_steps, chunk, step, floor, o, tau, b, 
             state[0], state[1], state[2] = x, f, n
             return k, CONTINUE, -1
         p = f / np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
-        x_new = x + step * p  # 2004: X_{k+1} = X_k + s F_k / |F_k|
+        if pc:  # 2010 F4.1
+            x_new = _corrected(x, p, n, step, dev, offs, full, la, fa)
+        else:
+            x_new = x + step * p  # 2004: X_{k+1} = X_k + s F_k / |F_k|
         tang = x_new - x
         tang /= max(np.sqrt(tang[0] * tang[0] + tang[1] * tang[1] + tang[2] * tang[2]), 1e-300)
-        sn, sf = _sample_light(x_new, tang, n, o, tau, b, h, lc2, ki, kernel, prune2)  # (16b)
+        sn, sf = _sample(x_new, tang, n, full, la, fa)  # (16b)
         x_prev = x
         x = x_new
         hit = target_hit(x, tg, reach)
         if hit >= 0:  # the line ends on the target point
             end = tg[hit].copy()
-            ne, fe = _sample_light(end, end - x_prev, n, o, tau, b, h, lc2, ki, kernel, prune2)
+            ne, fe = _sample(end, end - x_prev, n, full, la, fa)
             out_x[k], out_n[k], out_f[k] = end, ne, fe
             out_t[k] = np.sqrt(fe[0] * fe[0] + fe[1] * fe[1] + fe[2] * fe[2])
             return k + 1, ARRIVED_C, hit
