@@ -117,7 +117,8 @@ def test_every_menu_item(qtbot, win, tmp_path, monkeypatch):
     # File > Save session / Load session
     answers["save"] = str(tmp_path / "s.json")
     menu_action(menus["File"], "Save session").trigger()
-    assert json.loads((tmp_path / "s.json").read_text())["input"]["demo"] == "two-caps"
+    saved = json.loads((tmp_path / "s.json").read_text())
+    assert saved["input"]["demo"] == "two-caps" and saved["darning"] == "liepa-fair"
     m.edit(ki=0.25)
     answers["open"] = str(tmp_path / "s.json")
     menu_action(menus["File"], "Load session").trigger()

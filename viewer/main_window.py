@@ -458,7 +458,7 @@ class MainWindow(QMainWindow):
     def session(self) -> dict:
         return session_dict(self.model.source, self.model.params, self.scene.camera_state(),
                             layers=dict(self.scene.layers.visible), selection=self.model.selection,
-                            frame=self.model.frame)
+                            frame=self.model.frame, darning=self.model.darning)
 
     def save_session_dialog(self) -> None:
         path, _ = QFileDialog.getSaveFileName(self, "Save session", self._last_dir(), "Session (*.json)")
@@ -484,6 +484,8 @@ class MainWindow(QMainWindow):
             self.show_error("Cannot load session", str(exc))
             return
         self.model.set_params(data["params"])
+        if data.get("darning"):
+            self.model.set_darning(data["darning"])
         for name, on in data.get("layers", {}).items():
             if name in self.layer_actions:
                 self.layer_actions[name].setChecked(bool(on))
