@@ -11,6 +11,7 @@ Only picklable calls go here: module-level functions and plain data (an Icadm, F
 from __future__ import annotations
 
 import multiprocessing as mp
+import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
@@ -91,6 +92,7 @@ class ProcessRunner:
         self._ctx = ctx
         self.workers = workers
         self._next = 0
+        self._lock = threading.Lock()
         self._pool = self._new_pool()
         self.warmed = [self._pool.submit(warm) for _ in range(workers)] if warm_up else []
 
@@ -106,8 +108,9 @@ class ProcessRunner:
         raises Cancelled there) and Cancelled is raised here at once. ``progress(fraction)``
         relays the worker's reports.
         """
-        slot = self._next % SLOTS
-        self._next += 1
+        with self._lock:  # calls come from several worker threads
+            slot = self._next % SLOTS
+            self._next += 1
         self._flags[slot] = 0
         self._progress[slot] = 0.0
         try:
