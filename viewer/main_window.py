@@ -13,7 +13,7 @@ import importlib.util
 import time
 from pathlib import Path
 
-from PySide6.QtCore import QSettings, Qt
+from PySide6.QtCore import QEvent, QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (
     QDialog,
@@ -223,6 +223,18 @@ class MainWindow(QMainWindow):
         self._action(h, "&Shortcuts", self.show_shortcuts, "F1")
         self._action(h, "&About Bridgefield", self.show_about)
         self._fill_recent()
+        for m in (f, e, v, p, self.demos_menu, h, self.recent_menu, self.demos_menu_file):
+            m.aboutToHide.connect(self._repaint_frame)
+
+    def _repaint_frame(self) -> None:
+        """Repaint the window's own areas (dock separators) once a menu or a dialog went away:
+        with the docks in native windows, X leaves stale pixels there without a compositor."""
+        QTimer.singleShot(0, self.update)
+
+    def changeEvent(self, event) -> None:  # noqa: N802 (Qt API)
+        if event.type() == QEvent.ActivationChange and self.isActiveWindow():
+            self._repaint_frame()
+        super().changeEvent(event)
 
     def _fill_demos(self) -> None:
         for menu in (self.demos_menu, self.demos_menu_file):
@@ -315,11 +327,12 @@ class MainWindow(QMainWindow):
             v = [v]
         return [str(x) for x in (v or [])]
 
-    def _remember(self, path: str) -> None:
+    def _remember(self, path: str, *, demo: bool = False) -> None:
         p = str(Path(path).resolve())
         rec = [p] + [r for r in self.recent_files() if r != p]
         self.settings.setValue("recent", rec[:MAX_RECENT])
-        self.settings.setValue("last_dir", str(Path(p).parent))
+        if not demo:  # dialogs never default to the bundled assets folder
+            self.settings.setValue("last_dir", str(Path(p).parent))
         self._fill_recent()
 
     def _fill_recent(self) -> None:
@@ -579,7 +592,7 @@ class MainWindow(QMainWindow):
         if kind == "load":
             src = self._loading
             m.set_input(result, src)
-            self._remember(src.path)
+            self._remember(src.path, demo=src.demo is not None)
             self.setWindowTitle(f"Bridgefield - {src.label()}")
             s = result.mesh
             self.status.setText(f"Opened {src.label()}: {s.n_faces} faces, {len(m.frames)} boundary loops, "
