@@ -93,6 +93,9 @@ def test_repair_stages_on_the_timeline(qtbot, win):
     assert layers.actor("holes") is not None and layers.actor("patches") is None
     qtbot.mouseClick(tl.forward_button, Qt.LeftButton)
     assert m.stage == 1 and layers.actor("chains") is not None  # bridges appear
+    win.inspector.refresh()
+    qtbot.wait(200)
+    assert "stage 2 / " in win.inspector.html() and f"{len(m.repair.new_faces)} new faces" in win.inspector.html()
     tl.last()
     assert layers.meshes["patches"].n_cells == len(m.repair.new_faces)
     # the patch counts grow stage after stage
