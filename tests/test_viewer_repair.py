@@ -162,3 +162,16 @@ def test_stage_frames_cover_every_new_face_once():
         assert len(f) and set(p) & set(f.ravel().tolist())
     frames = stage_frames(r)
     assert [len(f.patches) for f in frames if f.patches is not None][-1] == len(r.new_faces)
+
+
+def test_repair_of_a_single_hole(qtbot, win):
+    """One loop, no islands to join: no bridges, the hole is darned; the stages still play."""
+    repaired(qtbot, win, "big-hole")
+    m = win.model
+    assert len(m.result.candidates) == 0 and len(m.repair.bridges) == 0
+    assert [s.name for s in m.stages] == ["input", "bridges", "holes", "split", "darned"]
+    assert win.bridges.table_model.rowCount() == 0
+    win.timeline.last()
+    assert win.scene.layers.meshes["patches"].n_cells == len(m.repair.new_faces) > 0
+    win.timeline.first()
+    assert "patches" not in win.scene.layers.meshes and win.scene.layers.actor("holes") is not None
