@@ -23,4 +23,12 @@ def run_app(path: str | None = None, demo: str | None = None, points: str | None
         QTimer.singleShot(50, lambda: win.open_path(path, points=points))
     elif demo:
         QTimer.singleShot(50, lambda: win.open_demo(demo))
+    # Ctrl+C in the terminal closes the window cleanly (workers stopped); the timer lets Python
+    # run its signal handler while Qt's loop runs
+    import signal
+
+    signal.signal(signal.SIGINT, lambda *_: (win.close(), app.quit()))
+    tick = QTimer()
+    tick.timeout.connect(lambda: None)
+    tick.start(250)
     return int(app.exec())

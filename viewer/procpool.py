@@ -27,8 +27,11 @@ _progress = None  # in a worker: shared progress fractions, one per slot
 
 
 def _init(flags, progress) -> None:
+    import signal
+
     global _flags, _progress
     _flags, _progress = flags, progress
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl+C in the terminal is for the window, not the workers
 
 
 def _run(slot: int, fn: Callable, args: tuple, control: bool):
