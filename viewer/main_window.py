@@ -519,10 +519,14 @@ class MainWindow(QMainWindow):
 
     # ================================================================ computing
     def recompute(self) -> None:
-        """Compute the field's bridges for the current input and parameters (in the worker)."""
-        if self.model.icadm is None:
+        """Compute the field's bridges (and the repair, once one was asked for) for the current
+        input and parameters (in the worker)."""
+        m = self.model
+        if m.icadm is None:
             return
-        self.worker.submit("field", jobs.bridges_job(self.find, self.model.icadm, self.model.params, self.runner))
+        self.worker.submit("field", jobs.bridges_job(self.find, m.icadm, m.params, self.runner))
+        if m.repair_wanted:
+            self.worker.submit("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params, self.runner))
 
     def _params_changed(self, params) -> None:
         if self.model.icadm is not None:
