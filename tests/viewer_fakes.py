@@ -58,3 +58,23 @@ def fake_trace(model, params, vertex):
     dist = np.linalg.norm(b - p, axis=1)
     j = int(np.argmax(dist) if len(frames) == 1 else np.argmin(dist))
     return straight_line(p, b[j], 60, ARRIVED, int(vertex), int(frames[-1].vertices[j]))
+
+
+def slow_count(n: int, pause: float, *, progress=None, cancel=None) -> int:
+    """A long call for the worker processes: counts to n, pausing, checking cancel, reporting."""
+    for k in range(n):
+        if cancel is not None and cancel():
+            raise Cancelled()
+        if progress is not None:
+            progress(k + 1, n)
+        time.sleep(pause)
+    return n
+
+
+def busy_python(seconds: float) -> int:
+    """Pure-Python work that holds the GIL in its process for `seconds`."""
+    t0 = time.perf_counter()
+    k = 0
+    while time.perf_counter() - t0 < seconds:
+        k += 1
+    return k

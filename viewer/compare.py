@@ -27,13 +27,14 @@ PRESETS = {
 
 
 class CompareWindow(QMainWindow):
-    def __init__(self, model, find, parent=None) -> None:
+    def __init__(self, model, find, parent=None, *, runner=None) -> None:
         super().__init__(parent)
         self.setWindowFlag(Qt.Window, True)
         self.setWindowTitle("Bridgefield - compare")
         self.resize(1300, 650)
         self.model = model
         self.find = find
+        self.runner = runner  # the main window's worker processes (None: worker threads)
         self.results: list = [None, None]
         self.worker = Worker(self)
         central = QWidget()
@@ -71,7 +72,7 @@ class CompareWindow(QMainWindow):
         self.results = [None, None]
         for i, params in enumerate(self.side_params()):
             self.sides[i].draw_result(None)
-            self.worker.submit(f"side{i}", jobs.bridges_job(self.find, self.model.icadm, params))
+            self.worker.submit(f"side{i}", jobs.bridges_job(self.find, self.model.icadm, params, self.runner))
         self.info.setText("computing…")
 
     def _landed(self, kind: str, result, seconds: float) -> None:

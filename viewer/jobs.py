@@ -24,7 +24,10 @@ def preload() -> None:
     for name in ("scipy.fft", "scipy.linalg", "scipy.optimize", "scipy.sparse", "scipy.sparse.csgraph",
                  "scipy.spatial", "trimesh", "trimesh.exchange.load", "trimesh.exchange.ply", "trimesh.exchange.obj",
                  "trimesh.exchange.stl", "trimesh.exchange.off", "trimesh.bounds", "trimesh.nsphere",
-                 "algorithms.normalize", "algorithms.topology", "algorithms.boundary", "algorithms.metrics"):
+                 "algorithms.normalize", "algorithms.topology", "algorithms.boundary", "algorithms.metrics",
+                 "algorithms.repair", "algorithms.repair_field", "algorithms.darning", "algorithms.darning.fair",
+                 "algorithms.darning.liepa", "algorithms.darning.fan", "algorithms.darning.refine",
+                 "algorithms.holes", "algorithms.bridge_graph", "scipy.sparse.linalg"):
         try:
             importlib.import_module(name)
         except ImportError:
@@ -54,6 +57,21 @@ def default_trace(model: Icadm, params: FieldParams, vertex: int):
     return trace(model, params, vertex)
 
 
+def default_repair(model: Icadm, params, *, progress=None, cancel=None):
+    """algorithms.repair.repair with RepairParams (the field's parameters and the darning method)."""
+    from algorithms.repair import repair
+
+    return repair(model, params, progress=progress, cancel=cancel)
+
+
+def repair_job(repair: Callable, model: Icadm, params, runner=None) -> Callable:
+    """params: RepairParams; the result carries what it was computed for (stale results are dropped)."""
+    def fn(progress=None, cancel=None):
+        return model, params, _via(runner, repair, (model, params), progress, cancel)
+
+    return fn
+
+
 def load_job(path: str, points: str | None) -> Callable:
     def fn(progress=None, cancel=None):
         return load_model(path, points=points)
@@ -61,15 +79,22 @@ def load_job(path: str, points: str | None) -> Callable:
     return fn
 
 
-def bridges_job(find: Callable, model: Icadm, params: FieldParams) -> Callable:
+def _via(runner, fn: Callable, args: tuple, progress, cancel, *, control: bool = True):
+    """fn(*args) here (a worker thread) or in a worker process of ``runner`` (a ProcessRunner)."""
+    if runner is None:
+        return fn(*args, progress=progress, cancel=cancel) if control else fn(*args)
+    return runner.call(fn, args, progress=progress, cancel=cancel, control=control)
+
+
+def bridges_job(find: Callable, model: Icadm, params: FieldParams, runner=None) -> Callable:
     def fn(progress=None, cancel=None):
-        return model, params, find(model, params, progress=progress, cancel=cancel)
+        return model, params, _via(runner, find, (model, params), progress, cancel)
 
     return fn
 
 
-def trace_job(trace: Callable, model: Icadm, params: FieldParams, vertex: int) -> Callable:
+def trace_job(trace: Callable, model: Icadm, params: FieldParams, vertex: int, runner=None) -> Callable:
     def fn(progress=None, cancel=None):
-        return model, params, vertex, trace(model, params, vertex)
+        return model, params, vertex, _via(runner, trace, (model, params, vertex), progress, cancel, control=False)
 
     return fn

@@ -1,9 +1,10 @@
 """The explorer's main window: the 3D view in the centre, docks for Parameters, Bridges,
 Inspector, Timeline and Plot, a status bar with progress and Cancel, menus and shortcuts.
 
-Data flows one way: file -> Icadm -> (worker) field result -> model -> views. Widgets write new
-parameters through the model; every edit recomputes in the worker (debounced, stale jobs
-cancelled and their results dropped) and the views update from the model's signals.
+Data flows one way: file -> Icadm -> (worker) field result [-> repair] -> model -> views.
+Widgets write new parameters through the model; every edit recomputes in the worker (debounced,
+stale jobs cancelled and their results dropped) and the views update from the model's signals.
+Once the user ran Repair (F6), edits recompute the repair too.
 """
 
 from __future__ import annotations
@@ -12,9 +13,10 @@ import importlib.util
 import time
 from pathlib import Path
 
-from PySide6.QtCore import QSettings, Qt
+from PySide6.QtCore import QEvent, QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (
+    QDialog,
     QDockWidget,
     QFileDialog,
     QLabel,
@@ -46,7 +48,8 @@ MAX_RECENT = 10
 
 
 class MainWindow(QMainWindow):
-    def __init__(self, *, settings: QSettings | None = None, find=None, trace=None) -> None:
+    def __init__(self, *, settings: QSettings | None = None, find=None, trace=None, repair=None,
+                 processes: bool | None = None) -> None:
         super().__init__()
         self.t_created = time.perf_counter()
         self.setWindowTitle("Bridgefield")
@@ -55,7 +58,17 @@ class MainWindow(QMainWindow):
         self.settings = settings if settings is not None else QSettings("Bridgefield", "explorer")
         self.find = find or jobs.default_find  # injectable for tests
         self.trace = trace or jobs.default_trace
-        jobs.preload()  # first imports never happen in a worker thread
+        self.repair_fn = repair or jobs.default_repair
+        # the real algorithms run in worker processes (their compiled kernels hold the GIL);
+        # injected stand-ins (tests) run in worker threads
+        if processes is None:
+            processes = find is None and trace is None and repair is None
+        self.runner = None
+        if processes:
+            from .procpool import shared_runner
+
+            self.runner = shared_runner()
+        self.workspaces: list = []  # hybrid / F-rep workspace windows opened from the Demos menu
         self.model = ExplorerModel(self)
         self.worker = Worker(self)
         self.errors: list[str] = []  # every error shown to the user, newest last
@@ -72,10 +85,18 @@ class MainWindow(QMainWindow):
         self._connect()
 
     # ================================================================ construction
+    @staticmethod
+    def _native(widget) -> None:
+        """Give a widget its own native window. Qt composes a window that holds an OpenGL widget
+        (the 3D view) with OpenGL on every repaint of any of its widgets: under software GL that
+        cost ~100 ms per progress-bar tick. A native child window repaints with a raster flush."""
+        widget.setAttribute(Qt.WA_NativeWindow, True)
+
     def _dock(self, title: str, widget, area) -> QDockWidget:
         d = QDockWidget(title, self)
         d.setObjectName(title)
         d.setWidget(widget)
+        self._native(widget)
         self.addDockWidget(area, d)
         return d
 
@@ -110,6 +131,7 @@ class MainWindow(QMainWindow):
         sb.addPermanentWidget(self.timing)
         sb.addPermanentWidget(self.progress)
         sb.addPermanentWidget(self.cancel_button)
+        self._native(sb)
 
     def _action(self, menu, text: str, slot, shortcut=None, *, tip: str = "", checkable=False) -> QAction:
         a = QAction(text, self)
@@ -139,8 +161,8 @@ class MainWindow(QMainWindow):
         f.addSeparator()
         self.act_save_input = self._action(f, "Save &mesh (normalised input)…", self.save_mesh_dialog, "Ctrl+S",
                                            tip="the input as normalised, with its free points")
-        self.act_save_repaired = self._action(f, "Save &repaired mesh…", self.save_repaired_dialog,
-                                              tip="needs the repair pipeline (algorithms/repair.py)")
+        self.act_save_repaired = self._action(f, "Save &repaired mesh…", self.save_repaired_dialog, "Ctrl+Alt+R",
+                                              tip="the repaired surface (after Repair, F6)")
         self.act_save_repaired.setEnabled(False)
         self.act_shot = self._action(f, "Export &screenshot (PNG)…", self.screenshot_dialog, "Ctrl+Shift+S")
         self.act_anim = self._action(f, "Export &animation (GIF/MP4)…", self.animation_dialog, "Ctrl+Shift+E")
@@ -157,6 +179,9 @@ class MainWindow(QMainWindow):
         self.act_redo.setEnabled(False)
         e.addSeparator()
         self._action(e, "Re&compute", self.recompute, "F5")
+        self.act_repair = self._action(e, "&Repair", self.run_repair, "F6",
+                                       tip="run the repair pipeline (bridges, hole splitting, darning); "
+                                           "parameter edits then recompute it")
         self.act_cancel = self._action(e, "&Cancel computation", self.cancel, "Esc")
 
         v = mb.addMenu("&View")
@@ -185,6 +210,12 @@ class MainWindow(QMainWindow):
         self._action(p, "&Last step", tl.last, "End")
         self.act_loop = self._action(p, "L&oop", tl.loop.setChecked, "L", checkable=True)
         tl.loop.toggled.connect(self.act_loop.setChecked)
+        p.addSeparator()
+        self.act_stages = self._action(p, "Repair &stages on the timeline",
+                                       lambda on: self.model.set_timeline_mode("stages" if on else "line"), "T",
+                                       checkable=True, tip="the timeline plays the repair's stages instead of "
+                                                           "the force line")
+        self.act_stages.setEnabled(False)
 
         self.demos_menu = mb.addMenu("&Demos")
         self._fill_demos()
@@ -192,6 +223,18 @@ class MainWindow(QMainWindow):
         self._action(h, "&Shortcuts", self.show_shortcuts, "F1")
         self._action(h, "&About Bridgefield", self.show_about)
         self._fill_recent()
+        for m in (f, e, v, p, self.demos_menu, h, self.recent_menu, self.demos_menu_file):
+            m.aboutToHide.connect(self._repaint_frame)
+
+    def _repaint_frame(self) -> None:
+        """Repaint the window's own areas (dock separators) once a menu or a dialog went away:
+        with the docks in native windows, X leaves stale pixels there without a compositor."""
+        QTimer.singleShot(0, self.update)
+
+    def changeEvent(self, event) -> None:  # noqa: N802 (Qt API)
+        if event.type() == QEvent.ActivationChange and self.isActiveWindow():
+            self._repaint_frame()
+        super().changeEvent(event)
 
     def _fill_demos(self) -> None:
         for menu in (self.demos_menu, self.demos_menu_file):
@@ -201,7 +244,6 @@ class MainWindow(QMainWindow):
                 a.setStatusTip(d.description)
                 a.setToolTip(d.description)
                 a.triggered.connect(lambda *_, n=name: self.open_demo(n))
-                a.setEnabled(d.kind == "repair")  # hybrid and F-rep workspaces come later
 
     def _connect(self) -> None:
         m, w = self.model, self.worker
@@ -218,6 +260,10 @@ class MainWindow(QMainWindow):
         self.parameters.layerToggled.connect(self.set_layer_visible)
         self.scene.pickedBoundary.connect(self.trace_from)
         self.scene.pickedBridge.connect(self.model.select)
+        m.darningChanged.connect(self._darning_changed)
+        m.repairChanged.connect(self._repair_shown)
+        m.timelineModeChanged.connect(self._timeline_mode_shown)
+        self.parameters.repair_button.clicked.connect(self.run_repair)
 
     # ================================================================ files
     def open_path(self, path: str, points: str | None = None, *, demo: str | None = None) -> None:
@@ -225,17 +271,39 @@ class MainWindow(QMainWindow):
         if not Path(path).exists():
             self.show_error("Cannot open", f"{path}: no such file")
             return
+        if demo is None:  # a bundled demo opened by its path (recent files, a dialog) keeps its name
+            here = Path(path).resolve()
+            demo = next((n for n, d in all_demos().items() if d.kind == "repair" and d.path.resolve() == here), None)
         self._loading = Source(str(path), points, demo)
         self.status.setText(f"Loading {Path(path).name}…")
+        jobs.preload()  # first imports never happen in a worker thread (done once, after the first frame)
         self.worker.submit("load", jobs.load_job(str(path), points))
 
-    def open_demo(self, name: str) -> None:
+    def open_demo(self, name: str):
+        """A repair demo opens here; a hybrid or F-rep demo opens its workspace window (returned)."""
         try:
             d = find_demo(name)
         except KeyError as exc:
             self.show_error("Unknown demo", str(exc))
-            return
+            return None
+        if d.kind in ("hybrid", "frep"):
+            return self.open_workspace(d.kind, name)
         self.open_path(str(d.path), demo=name)
+        return None
+
+    def open_workspace(self, kind: str, demo: str | None = None):
+        from .workspaces import open_workspace
+
+        try:
+            w = open_workspace(kind, self, demo=demo)
+        except Exception as exc:
+            self.show_error("Cannot open the workspace", f"{type(exc).__name__}: {exc}")
+            return None
+        self.workspaces = [x for x in self.workspaces if _alive(x)] + [w]
+        w.destroyed.connect(lambda *_: setattr(self, "workspaces", [x for x in self.workspaces
+                                                                      if x is not w and _alive(x)]))
+        self.status.setText(f"Opened the {kind} workspace on demo {demo}")
+        return w
 
     def open_dialog(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Open mesh", self._last_dir(), MESH_FILTER)
@@ -259,11 +327,12 @@ class MainWindow(QMainWindow):
             v = [v]
         return [str(x) for x in (v or [])]
 
-    def _remember(self, path: str) -> None:
+    def _remember(self, path: str, *, demo: bool = False) -> None:
         p = str(Path(path).resolve())
         rec = [p] + [r for r in self.recent_files() if r != p]
         self.settings.setValue("recent", rec[:MAX_RECENT])
-        self.settings.setValue("last_dir", str(Path(p).parent))
+        if not demo:  # dialogs never default to the bundled assets folder
+            self.settings.setValue("last_dir", str(Path(p).parent))
         self._fill_recent()
 
     def _fill_recent(self) -> None:
@@ -309,7 +378,32 @@ class MainWindow(QMainWindow):
                 self.show_error("Cannot save", str(exc))
 
     def save_repaired_dialog(self) -> None:
-        self.show_error("Not yet", "Saving a repaired mesh needs the repair pipeline (not in this build).")
+        """The file dialog asks before replacing a file; only then is it overwritten."""
+        if self.model.repair is None:
+            self.show_error("Nothing to save", "Run the repair first (Edit > Repair, F6).")
+            return
+        dlg = QFileDialog(self, "Save repaired mesh", self._last_dir(), MESH_FILTER)
+        dlg.setAcceptMode(QFileDialog.AcceptSave)
+        dlg.setDefaultSuffix("ply")
+        if self.model.source is not None:
+            dlg.selectFile(Path(self.model.source.path).stem + "-repaired.ply")
+        if dlg.exec() != QDialog.Accepted or not dlg.selectedFiles():
+            return
+        self.save_repaired(dlg.selectedFiles()[0], force=True)  # the dialog confirmed any overwrite
+
+    def save_repaired(self, path: str, *, force: bool = False) -> bool:
+        """Write the repaired surface (PLY/OBJ/STL/OFF); an existing file only with force."""
+        r = self.model.repair
+        if r is None:
+            self.show_error("Nothing to save", "Run the repair first (Edit > Repair, F6).")
+            return False
+        try:
+            out = save_mesh(r.mesh, path, force=force)
+        except Exception as exc:
+            self.show_error("Cannot save", str(exc))
+            return False
+        self.status.setText(f"Saved the repaired mesh to {out} ({r.mesh.n_faces} faces)")
+        return True
 
     def screenshot_dialog(self) -> None:
         path, _ = QFileDialog.getSaveFileName(self, "Export screenshot", self._last_dir(), "PNG image (*.png)")
@@ -377,7 +471,7 @@ class MainWindow(QMainWindow):
     def session(self) -> dict:
         return session_dict(self.model.source, self.model.params, self.scene.camera_state(),
                             layers=dict(self.scene.layers.visible), selection=self.model.selection,
-                            frame=self.model.frame)
+                            frame=self.model.frame, darning=self.model.darning)
 
     def save_session_dialog(self) -> None:
         path, _ = QFileDialog.getSaveFileName(self, "Save session", self._last_dir(), "Session (*.json)")
@@ -403,6 +497,8 @@ class MainWindow(QMainWindow):
             self.show_error("Cannot load session", str(exc))
             return
         self.model.set_params(data["params"])
+        if data.get("darning"):
+            self.model.set_darning(data["darning"])
         for name, on in data.get("layers", {}).items():
             if name in self.layer_actions:
                 self.layer_actions[name].setChecked(bool(on))
@@ -423,14 +519,40 @@ class MainWindow(QMainWindow):
 
     # ================================================================ computing
     def recompute(self) -> None:
-        """Compute the field's bridges for the current input and parameters (in the worker)."""
-        if self.model.icadm is None:
+        """Compute the field's bridges (and the repair, once one was asked for) for the current
+        input and parameters (in the worker)."""
+        m = self.model
+        if m.icadm is None:
             return
-        self.worker.submit("field", jobs.bridges_job(self.find, self.model.icadm, self.model.params))
+        self.worker.submit("field", jobs.bridges_job(self.find, m.icadm, m.params, self.runner))
+        if m.repair_wanted:
+            self.worker.submit("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params, self.runner))
 
     def _params_changed(self, params) -> None:
         if self.model.icadm is not None:
-            self.worker.schedule("field", jobs.bridges_job(self.find, self.model.icadm, params))
+            self.worker.schedule("field", jobs.bridges_job(self.find, self.model.icadm, params, self.runner))
+            self._schedule_repair()
+
+    def _darning_changed(self, darning: str) -> None:
+        if not self._schedule_repair():
+            self.status.setText(f"Darning method: {darning} (used by Repair, F6)")
+
+    def _schedule_repair(self) -> bool:
+        m = self.model
+        if m.icadm is None or not m.repair_wanted:
+            return False
+        self.worker.schedule("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params, self.runner))
+        return True
+
+    def run_repair(self) -> None:
+        """Run the repair pipeline on the current input (in the worker); show its stages."""
+        m = self.model
+        if m.icadm is None:
+            self.show_error("Nothing to repair", "Open a mesh or a demo first.")
+            return
+        m.repair_wanted = True
+        self._show_stages_next = True
+        self.worker.submit("repair", jobs.repair_job(self.repair_fn, m.icadm, m.repair_params, self.runner))
 
     def trace_from(self, vertex: int) -> None:
         """Trace a force line from a boundary vertex (the inspector's click), then animate it."""
@@ -444,7 +566,7 @@ class MainWindow(QMainWindow):
         self.inspector.set_picked({"vertex": vertex, "loop": loop, "index": index,
                                    "point": m.icadm.mesh.vertices[vertex], "omega": omega})
         self.status.setText(f"Tracing a force line from vertex {vertex}…")
-        self.worker.submit("trace", jobs.trace_job(self.trace, m.icadm, m.params, vertex))
+        self.worker.submit("trace", jobs.trace_job(self.trace, m.icadm, m.params, vertex, self.runner))
 
     def cancel(self) -> None:
         if self.worker.busy:
@@ -458,6 +580,8 @@ class MainWindow(QMainWindow):
         self._job_t0 = time.perf_counter()
         if kind == "field":
             self.status.setText("Computing the field and tracing force lines…")
+        elif kind == "repair":
+            self.status.setText("Repairing: bridges, hole splitting, darning…")
 
     def _job_progress(self, kind: str, frac: float) -> None:
         self.progress.setValue(int(max(0.0, min(1.0, frac)) * 1000))
@@ -472,7 +596,7 @@ class MainWindow(QMainWindow):
         if kind == "load":
             src = self._loading
             m.set_input(result, src)
-            self._remember(src.path)
+            self._remember(src.path, demo=src.demo is not None)
             self.setWindowTitle(f"Bridgefield - {src.label()}")
             s = result.mesh
             self.status.setText(f"Opened {src.label()}: {s.n_faces} faces, {len(m.frames)} boundary loops, "
@@ -499,7 +623,39 @@ class MainWindow(QMainWindow):
             m.select(-1)
             m.set_line(line, label=f"traced from vertex {vertex}", frame=0)
             self.status.setText(f"Force line from vertex {vertex}: {line.status}, {line.steps} steps")
+            m.set_timeline_mode("line")
             self.timeline.play()
+        elif kind == "repair":
+            model, params, rep = result
+            if model is not m.icadm or params != m.repair_params:
+                return  # computed for an input or parameters no longer shown
+            m.set_repair(rep)
+            self.status.setText(self.repair_summary(rep))
+            self.timing.setText(f"repair {seconds * 1000:.0f} ms")
+            if getattr(self, "_show_stages_next", False):
+                self._show_stages_next = False
+                m.set_timeline_mode("stages")
+                m.set_stage(0)
+                self.timeline.play()
+
+    @staticmethod
+    def repair_summary(r) -> str:
+        from algorithms.metrics import topology
+
+        topo = topology(r.mesh.faces)
+        darned = sum(h.split_by < 0 for h in r.holes)
+        return (f"Repaired ({r.class_found}): {len(r.bridges)} bridges kept, {len(r.rejected)} rejected, "
+                f"{darned} holes darned with {r.params.darning}, {len(r.new_faces)} new faces; "
+                f"{'watertight' if topo.watertight else f'{topo.boundary_loops} boundary loops left'}")
+
+    def _repair_shown(self, repair) -> None:
+        self.act_save_repaired.setEnabled(repair is not None)
+        self.act_stages.setEnabled(repair is not None)
+
+    def _timeline_mode_shown(self, mode: str) -> None:
+        self.act_stages.blockSignals(True)
+        self.act_stages.setChecked(mode == "stages")
+        self.act_stages.blockSignals(False)
 
     def _result_shown(self, result) -> None:
         if result is None and self.model.icadm is not None:
@@ -507,7 +663,7 @@ class MainWindow(QMainWindow):
 
     def _job_failed(self, kind: str, message: str) -> None:
         what = {"load": "Cannot open the file", "field": "The field computation failed",
-                "trace": "Tracing failed"}.get(kind, "Error")
+                "trace": "Tracing failed", "repair": "The repair failed"}.get(kind, "Error")
         if kind == "load" and isinstance(self._pending_session, dict):
             self._pending_session = None
         self.show_error(what, message)
@@ -536,7 +692,7 @@ class MainWindow(QMainWindow):
             return None
         if self.compare_window is not None:
             self.compare_window.close()
-        self.compare_window = CompareWindow(self.model, self.find, parent=self)
+        self.compare_window = CompareWindow(self.model, self.find, parent=self, runner=self.runner)
         self.compare_window.show()
         return self.compare_window
 
@@ -585,10 +741,24 @@ class MainWindow(QMainWindow):
         self.timeline.pause()
         if self.compare_window is not None:
             self.compare_window.close()
-        self.worker.shutdown()
+        for w in list(self.workspaces):
+            if _alive(w):
+                w.close()
+        self.workspaces = []
+        self.worker.shutdown()  # cancels this window's calls in the shared worker processes
         self.scene.close()
 
     def closeEvent(self, event) -> None:  # noqa: N802 (Qt API)
         self.shutdown()
         super().closeEvent(event)
 
+
+
+def _alive(widget) -> bool:
+    """False once Qt deleted the C++ object behind a Python wrapper (a closed workspace window)."""
+    try:
+        from shiboken6 import isValid
+
+        return bool(isValid(widget))
+    except ImportError:  # pragma: no cover
+        return True

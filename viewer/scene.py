@@ -6,7 +6,12 @@ Layers (each a named actor, replaced or updated in place, never piled up):
 with its scalar bar), ``bridges`` (arrived force lines as tubes coloured by quality, with a
 labelled scalar bar), ``rejected`` (lines that did not arrive, coloured by how they ended),
 ``selection`` (the selected bridge), ``line`` (the force line on the timeline, drawn up to the
-current step, with its normal and force as arrows at the head).
+current step, with its normal and force as arrows at the head), ``patches`` (the faces a repair
+added) and ``holes`` (the repair stage on the timeline: hole outlines and bridge chains).
+
+Kept and rejected: before a repair, the lines that arrived are drawn as bridges; once a repair
+exists, only the bridges its conflict resolution kept are tubes, the arrived lines it rejected
+are thin dark lines (the Bridges table gives the reason).
 
 Every method here must run on the GUI thread (VTK).
 """
@@ -30,15 +35,47 @@ QUALITY_CMAP = "viridis"
 QUALITY_BAR = "bridge quality"
 OMEGA_CMAP = "inferno"
 OMEGA_BAR = "attraction index"
-LAYERS = ("islands", "loops", "free_points", "attraction", "bridges", "rejected", "line")
+CONFLICT_COLOUR = "#303030"  # arrived lines the repair's conflict resolution rejected
+PATCH_COLOUR = "#4e9bd1"
+HOLE_COLOUR = "#ff7f0e"
+CHAIN_COLOUR = "#202020"
+LAYERS = ("islands", "loops", "free_points", "attraction", "bridges", "rejected", "line", "patches", "holes")
 LAYER_TITLES = {"islands": "Islands", "loops": "Boundary loops", "free_points": "Free points",
                 "attraction": "Attraction index Ω", "bridges": "Bridges (kept)",
-                "rejected": "Rejected lines", "line": "Traced line"}
+                "rejected": "Rejected lines", "line": "Traced line", "patches": "Repaired patches",
+                "holes": "Repair stage (holes, chains)"}
+FIELD_LAYERS = ("bridges", "rejected", "line")  # hidden while the timeline plays the repair's stages
 
 
-def kept_mask(result) -> np.ndarray:
-    """Which candidates are kept. Until the repair pipeline resolves conflicts: those that arrived."""
-    return np.array([c.line.arrived for c in result.candidates], dtype=bool)
+def bridge_verdicts(result, repair=None) -> tuple[np.ndarray, list[str]]:
+    """Kept or not, and why, for every candidate of a BridgeSet.
+
+    Without a repair: kept = arrived. With one: kept = an island bridge of the repair (matched by
+    its end vertices), otherwise the repair's reason for rejecting it (conflict resolution).
+    """
+    cands = list(result.candidates) if result is not None else []
+    if repair is None:
+        kept = np.array([c.line.arrived for c in cands], dtype=bool)
+        return kept, ["arrived" if k else c.line.status for k, c in zip(kept, cands)]
+    kept_ends = {(int(b.start), int(b.end)) for b in repair.bridges if b.kind == "island"}
+    why: dict[tuple[int, int], str] = {}
+    for i, reason in repair.rejected:
+        if 0 <= i < len(repair.lines):
+            ln = repair.lines[i]
+            why.setdefault((int(ln.start_vertex), int(ln.end_vertex)), reason)
+    kept, reasons = [], []
+    for c in cands:
+        key = (int(c.line.start_vertex), int(c.line.end_vertex))
+        k = c.line.arrived and key in kept_ends
+        kept.append(k)
+        reasons.append("kept by the repair" if k else (c.line.status if not c.line.arrived
+                                                       else why.get(key, "not used by the repair")))
+    return np.array(kept, dtype=bool), reasons
+
+
+def kept_mask(result, repair=None) -> np.ndarray:
+    """Which candidates are kept: arrived ones, or those the repair kept once one exists."""
+    return bridge_verdicts(result, repair)[0]
 
 
 def qualities(result) -> np.ndarray:
@@ -60,6 +97,9 @@ class SceneLayers:
         self._line: ForceLine | None = None
         self._arrows: dict[str, pv.PolyData] = {}
         self._bridge_polys: list[np.ndarray] = []
+        self.meshes: dict[str, pv.PolyData] = {}
+        self._tubes_drawn: tuple[list, pv.PolyData] | None = None  # (kept polylines, their tubes)
+        self.stage_mode = False  # the timeline shows the repair's stages: field layers hidden
 
     # ---------------------------------------------------------------- plumbing
     def _here(self) -> None:
@@ -72,7 +112,12 @@ class SceneLayers:
         return self.plotter.renderers[self.plotter.renderers.loc_to_index(self.subplot)]
 
     def _remove(self, name: str) -> None:
+        self.meshes.pop(name, None)
         self._here()
+        bar = {"bridges": QUALITY_BAR, "attraction": OMEGA_BAR}.get(name)
+        if bar is not None and self.bar_title(bar) in getattr(self.plotter, "scalar_bars", {}):
+            # a scalar bar keeps the range of every mapper it was made for: drop it with its actor
+            self.plotter.remove_scalar_bar(self.bar_title(bar), render=False)
         self.plotter.remove_actor(name, render=False)
 
     def actor(self, name: str):
@@ -84,7 +129,8 @@ class SceneLayers:
     def _add(self, mesh, name: str, layer: str, **kw):
         self._here()
         actor = self.plotter.add_mesh(mesh, name=name, render=False, reset_camera=False, **kw)
-        actor.SetVisibility(self.visible[layer])
+        self.meshes[name] = mesh  # what each named actor draws (tests and exports read it)
+        actor.SetVisibility(self.shown(layer))
         return actor
 
     def _bar_visible(self, title: str, on: bool) -> None:
@@ -92,9 +138,18 @@ class SceneLayers:
         if title in bars:
             bars[title].SetVisibility(on)
 
+    def shown(self, layer: str) -> bool:
+        """A layer is drawn when its toggle is on (field layers not while stages play)."""
+        return self.visible[layer] and not (self.stage_mode and layer in FIELD_LAYERS)
+
     def set_visible(self, layer: str, on: bool) -> None:
         self.visible[layer] = bool(on)
-        names = {"line": ("line", "line_head", "arrow_normal", "arrow_force"), "bridges": ("bridges", "selection")}
+        self._apply_visibility(layer)
+
+    def _apply_visibility(self, layer: str) -> None:
+        on = self.shown(layer)
+        names = {"line": ("line", "line_head", "arrow_normal", "arrow_force"), "bridges": ("bridges", "selection"),
+                 "holes": ("holes", "chains")}
         for name in names.get(layer, (layer,)):
             a = self.actor(name)
             if a is not None:
@@ -104,6 +159,11 @@ class SceneLayers:
         if layer == "bridges":
             self._bar_visible(self.bar_title(QUALITY_BAR), on)
 
+    def set_stage_mode(self, on: bool) -> None:
+        self.stage_mode = bool(on)
+        for layer in (*FIELD_LAYERS, "holes"):
+            self._apply_visibility(layer)
+
     # ---------------------------------------------------------------- the input
     def draw_model(self, model: Icadm, frames: list[LoopFrame] | None = None) -> None:
         self.model = model
@@ -112,7 +172,7 @@ class SceneLayers:
         v = mesh.vertices
         self.scale = float(np.linalg.norm(v.max(0) - v.min(0))) if len(v) else 1.0
         for name in ("bridges", "rejected", "selection", "attraction", "line", "line_head",
-                     "arrow_normal", "arrow_force"):
+                     "arrow_normal", "arrow_force", "patches", "holes", "chains"):
             self._remove(name)
         self._line_mesh = None
         self._arrows = {}
@@ -143,16 +203,35 @@ class SceneLayers:
         self.plotter.camera.zoom(1.1)
 
     # ---------------------------------------------------------------- field results
-    def draw_result(self, result, *, clim: tuple[float, float] | None = None) -> None:
-        """Ω on boundary points, kept bridges as tubes by quality, rejected lines by status."""
-        for name in ("bridges", "rejected", "selection", "attraction"):
+    def draw_result(self, result, *, clim: tuple[float, float] | None = None, repair=None) -> None:
+        """Ω on boundary points, kept bridges as tubes by quality, lines that did not arrive by
+        status, arrived lines the repair rejected (when a repair is given) in dark grey."""
+        for name in ("rejected", "selection"):
             self._remove(name)
         self._bridge_polys = []
+        cands = list(result.candidates) if result is not None else []
+        kept = kept_mask(result, repair) if cands else np.zeros(0, dtype=bool)
+        q = qualities(result) if cands else np.zeros(0)
+        self._bridge_polys = [np.asarray(c.line.points) for c in cands]
+        self._draw_tubes([self._bridge_polys[i] for i in np.nonzero(kept)[0]], q[kept], clim)
         if result is None:
+            self._remove("attraction")
             return
         # Ω on boundary points (loop order = loop_frames(model.mesh))
         att = [np.asarray(a, dtype=np.float64) for a in getattr(result, "attraction", ())]
-        if att and len(att) == len(self.frames) and all(len(a) == len(f.points) for a, f in zip(att, self.frames)):
+        if not (att and len(att) == len(self.frames) and all(len(a) == len(f.points)
+                                                             for a, f in zip(att, self.frames))):
+            self._remove("attraction")
+        elif self.actor("attraction") is not None and "attraction" in self.meshes:
+            omega = np.concatenate(att)  # same points, new values: in place (no new scalar bar)
+            pts = self.meshes["attraction"]
+            pts.point_data["omega"][:] = omega
+            pts.Modified()
+            hi = float(omega.max()) or 1.0
+            mapper = self.actor("attraction").mapper
+            mapper.scalar_range = (0.0, hi)
+            mapper.lookup_table.scalar_range = (0.0, hi)
+        else:
             pts = points(np.vstack([f.points for f in self.frames]))
             pts.point_data["omega"] = np.concatenate(att)
             hi = float(pts.point_data["omega"].max()) or 1.0
@@ -161,31 +240,49 @@ class SceneLayers:
                       scalar_bar_args=dict(title=self.bar_title(OMEGA_BAR), vertical=True, position_x=0.87,
                                            position_y=0.08, height=0.38, width=0.05, fmt="%.3g",
                                            title_font_size=14, label_font_size=12, color="black"))
-        cands = list(result.candidates)
-        if not cands:
-            return
-        kept = kept_mask(result)
-        q = qualities(result)
-        self._bridge_polys = [np.asarray(c.line.points) for c in cands]
-        if kept.any():
-            lines = [self._bridge_polys[i] for i in np.nonzero(kept)[0]]
-            lo, hi = clim if clim is not None else (float(q[kept].min()), float(q[kept].max()))
-            if hi <= lo:
-                hi = lo + (abs(lo) * 1e-3 or 1e-9)
-            t = tubes(lines, q[kept], radius=0.0045 * self.scale, name="quality")
-        if kept.any() and t.n_points:
-            self._add(t, "bridges", "bridges", scalars="quality", cmap=QUALITY_CMAP, clim=[lo, hi],
-                      smooth_shading=True, pickable=True,
-                      scalar_bar_args=dict(title=self.bar_title(QUALITY_BAR), vertical=True, position_x=0.87,
-                                           position_y=0.55, height=0.38, width=0.05, fmt="%.3g",
-                                           title_font_size=14, label_font_size=12, color="black"))
         if (~kept).any():
             idx = np.nonzero(~kept)[0]
             pd = polylines([self._bridge_polys[i] for i in idx])
-            status_colour = np.array([_rgb(STATUS_COLOURS[cands[i].line.status]) for i in idx], dtype=np.uint8)
+            colours = [CONFLICT_COLOUR if cands[i].line.arrived else STATUS_COLOURS[cands[i].line.status] for i in idx]
+            status_colour = np.array([_rgb(c) for c in colours], dtype=np.uint8)
             pd.cell_data["status_rgb"] = status_colour
             self._add(pd, "rejected", "rejected", scalars="status_rgb", rgb=True, line_width=2, opacity=0.8,
                       pickable=True)
+
+    def _draw_tubes(self, lines: list[np.ndarray], values: np.ndarray, clim) -> None:
+        """The kept bridges as tubes coloured by quality. When the lines are the ones drawn (a k_i
+        edit changes the qualities, not the lines), only the colours change, in place."""
+        if not lines:
+            self._remove("bridges")
+            self._tubes_drawn = None
+            return
+        lo, hi = clim if clim is not None else (float(values.min()), float(values.max()))
+        if hi <= lo:
+            hi = lo + (abs(lo) * 1e-3 or 1e-9)
+        old = self._tubes_drawn
+        actor = self.actor("bridges")
+        if (actor is not None and old is not None and len(old[0]) == len(lines)
+                and all(a is b or np.array_equal(a, b) for a, b in zip(old[0], lines))):
+            t = old[1]
+            t.point_data["quality"][:] = np.asarray(values, dtype=np.float64)[t.point_data["line"]]
+            t.Modified()
+            actor.mapper.scalar_range = (lo, hi)
+            actor.mapper.lookup_table.scalar_range = (lo, hi)  # the scalar bar reads the table
+            self._tubes_drawn = (lines, t)
+            return
+        t = tubes(lines, values, radius=0.0045 * self.scale, name="quality")
+        self._remove("bridges")
+        self._tubes_drawn = None
+        if t.n_points:
+            # Gouraud with the tube filter's normals: smooth_shading would draw a copy, and the
+            # in-place colour update above must reach the drawn mesh
+            self._add(t, "bridges", "bridges", scalars="quality", cmap=QUALITY_CMAP, clim=[lo, hi],
+                      interpolation="gouraud", pickable=True, scalar_bar_args=self._quality_bar())
+            self._tubes_drawn = (lines, t)
+
+    def _quality_bar(self) -> dict:
+        return dict(title=self.bar_title(QUALITY_BAR), vertical=True, position_x=0.87, position_y=0.55, height=0.38,
+                    width=0.05, fmt="%.3g", title_font_size=14, label_font_size=12, color="black")
 
     def draw_selection(self, result, index: int) -> None:
         self._remove("selection")
@@ -197,8 +294,38 @@ class SceneLayers:
         t = tubes([np.asarray(line.points)], np.zeros(1), radius=0.009 * self.scale, name="s")
         if not t.n_points:
             return
-        actor = self._add(t, "selection", "bridges", color="#ffdd00", opacity=0.45, pickable=False)
-        actor.SetVisibility(self.visible["bridges"])
+        self._add(t, "selection", "bridges", color="#ffdd00", opacity=0.45, pickable=False)
+
+    # ---------------------------------------------------------------- the repair
+    def draw_patches(self, vertices, faces) -> None:
+        """The faces a repair added (or the part of them a stage shows)."""
+        self._remove("patches")
+        if vertices is None or faces is None or not len(faces):
+            return
+        self._add(polydata((vertices, faces)), "patches", "patches", color=PATCH_COLOUR, show_edges=True,
+                  edge_color="#2b5d80", line_width=0.5, smooth_shading=False, pickable=False)
+
+    def draw_repair(self, repair) -> None:
+        """The final patches of a RepairResult (None removes them)."""
+        if repair is None:
+            self.draw_patches(None, None)
+        else:
+            self.draw_patches(repair.mesh.vertices, repair.mesh.faces[repair.new_faces])
+
+    def draw_stage(self, frame) -> None:
+        """One frame of the repair's stages: hole outlines, bridge chains, patches so far."""
+        for name in ("holes", "chains"):
+            self._remove(name)
+        if frame is None:
+            return
+        if frame.holes:
+            self._add(polylines(list(frame.holes), closed=True), "holes", "holes", color=HOLE_COLOUR, line_width=4,
+                      render_lines_as_tubes=True, pickable=False)
+        if frame.bridges:
+            t = tubes(list(frame.bridges), np.zeros(len(frame.bridges)), radius=0.004 * self.scale, name="s")
+            if t.n_points:
+                self._add(t, "chains", "holes", color=CHAIN_COLOUR, pickable=False)
+        self.draw_patches(frame.vertices, frame.patches)
 
     def nearest_bridge(self, point: np.ndarray) -> tuple[int, float]:
         """The candidate whose polyline passes nearest the point, and that distance."""

@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
+from PySide6.QtOpenGLWidgets import QOpenGLWidget
 from pyvistaqt import QtInteractor
 
 from .scene import SceneLayers
@@ -40,6 +41,9 @@ class SceneView(QObject):
         model.selectionChanged.connect(self._selection_changed)
         model.lineChanged.connect(self._line_changed)
         model.frameChanged.connect(self._frame_changed)
+        model.repairChanged.connect(self._repair_changed)
+        model.stageChanged.connect(self._stage_changed)
+        model.timelineModeChanged.connect(self._timeline_mode_changed)
         self.plotter.enable_point_picking(callback=self.on_pick, show_message=False, show_point=False,
                                           left_clicking=False, use_picker=True, pickable_window=False)
 
@@ -53,10 +57,16 @@ class SceneView(QObject):
             self._render_timer.start(0)
 
     def render_now(self) -> None:
+        """Render the scene once. A shown view is asked to repaint (its paintGL renders): calling
+        the render window directly would render twice (pyvistaqt's paintGL always renders, and a
+        finished render schedules a paint)."""
         if getattr(self.plotter, "_closed", False):
             return
         t = time.perf_counter()
-        self.plotter.render()
+        if self.plotter.isVisible() and getattr(self.plotter, "_rendered", False):
+            QOpenGLWidget.update(self.plotter)
+        else:
+            self.plotter.render()
         self.render_seconds += time.perf_counter() - t
         self.renders += 1
 
@@ -88,7 +98,30 @@ class SceneView(QObject):
         self.request_render()
 
     def _result_changed(self, result) -> None:
-        self.layers.draw_result(result)  # the camera stays where it is
+        self.layers.draw_result(result, repair=self.model.repair)  # the camera stays where it is
+        self.request_render()
+
+    def _repair_changed(self, repair) -> None:
+        if self.model.result is not None:  # kept / rejected now come from the repair
+            self.layers.draw_result(self.model.result, repair=repair)
+            self.layers.draw_selection(self.model.result, self.model.selection)
+        if self.model.timeline_mode == "stages" and self.model.stages:
+            self.layers.draw_stage(self.model.stages[self.model.stage])
+        else:
+            self.layers.draw_stage(None)
+            self.layers.draw_repair(repair)
+        self.request_render()
+
+    def _stage_changed(self, k: int) -> None:
+        if self.model.timeline_mode == "stages" and 0 <= k < len(self.model.stages):
+            self.layers.draw_stage(self.model.stages[k])
+            self.request_render()
+
+    def _timeline_mode_changed(self, mode: str) -> None:
+        self.layers.set_stage_mode(mode == "stages")
+        if mode == "line":
+            self.layers.draw_stage(None)
+            self.layers.draw_repair(self.model.repair)
         self.request_render()
 
     def _selection_changed(self, index: int) -> None:
@@ -115,7 +148,7 @@ class SceneView(QObject):
             return
         p = np.asarray(point, dtype=np.float64).reshape(3)
         scale = self.layers.scale
-        bi, bd = self.layers.nearest_bridge(p) if self.layers.visible["bridges"] else (-1, np.inf)
+        bi, bd = self.layers.nearest_bridge(p) if self.layers.shown("bridges") else (-1, np.inf)
         allp = np.vstack([f.points for f in self.model.frames])
         allv = np.concatenate([f.vertices for f in self.model.frames])
         d = np.linalg.norm(allp - p, axis=1)

@@ -77,9 +77,12 @@ def polyline_prefix(pts: NDArray[np.float64], k: int, *, out: pv.PolyData | None
 
 def tubes(chains: list[NDArray[np.float64]], values: NDArray[np.float64], *, radius: float,
           name: str = "value", sides: int = 10) -> pv.PolyData:
-    """Tubes around polylines, one scalar per line carried on every tube point."""
-    parts = []
-    for c, v in zip(chains, values):
+    """Tubes around polylines (one tube filter call for all), one scalar per line carried on
+    every tube point, and ``line`` = the index of the chain each tube point belongs to (so the
+    scalars can be updated in place)."""
+    pts, lines, owner, vals = [], [], [], []
+    off = 0
+    for k, (c, v) in enumerate(zip(chains, values)):
         c = np.asarray(c, dtype=np.float64)
         if len(c) < 2:
             continue
@@ -87,12 +90,21 @@ def tubes(chains: list[NDArray[np.float64]], values: NDArray[np.float64], *, rad
         c = c[keep]  # the tube filter fails on repeated points
         if len(c) < 2:
             continue
-        t = polyline(c).tube(radius=radius, n_sides=sides, capping=True)
-        t.point_data[name] = np.full(t.n_points, float(v))
-        parts.append(t)
-    if not parts:
+        n = len(c)
+        pts.append(c)
+        lines += [n, *range(off, off + n)]
+        owner.append(np.full(n, k, dtype=np.int64))
+        vals.append(np.full(n, float(v)))
+        off += n
+    if not pts:
         return pv.PolyData()
-    return pv.merge(parts) if len(parts) > 1 else parts[0]
+    pd = pv.PolyData(np.vstack(pts), lines=np.asarray(lines))
+    pd.point_data[name] = np.concatenate(vals)
+    pd.point_data["line"] = np.concatenate(owner)
+    t = pd.tube(radius=radius, n_sides=sides, capping=True)
+    t.point_data["line"] = np.rint(t.point_data["line"]).astype(np.int64)
+    t.set_active_scalars(name)
+    return t
 
 
 _ARROW: pv.PolyData | None = None

@@ -1,9 +1,10 @@
 """Running algorithm calls off the GUI thread, with progress, cancel and stale-result dropping.
 
 A job is a callable ``fn(progress=..., cancel=...)``: ``progress(fraction)`` (or
-``progress(done, total)``) reports how far it is, ``cancel()`` returns True once the job should
-stop (the algorithm then raises :class:`algorithms.records.Cancelled`). Jobs run in QThreads and
-report through Qt signals, which Qt queues to the GUI thread: no VTK call ever happens here.
+``progress(done, total)``, or ``progress(fraction, message)``) reports how far it is,
+``cancel()`` returns True once the job should stop (the algorithm then raises
+:class:`algorithms.records.Cancelled`). Jobs run in QThreads and report through Qt signals,
+which Qt queues to the GUI thread: no VTK call ever happens here.
 
 Jobs have a *kind* ("field", "trace", ...). Submitting a job of a kind cancels the running job of
 that kind; a job's result lands only if it is still the newest of its kind (stale results are
@@ -35,7 +36,7 @@ class _Job(QThread):
         self._last_progress = 0.0
 
     def _progress(self, *args) -> None:
-        if len(args) >= 2 and args[1]:
+        if len(args) >= 2 and isinstance(args[1], (int, float)) and args[1]:  # (done, total)
             frac = float(args[0]) / float(args[1])
         elif args:
             frac = float(args[0])
@@ -77,7 +78,7 @@ class Worker(QObject):
     cancelled = Signal(str)
     busyChanged = Signal(bool)
 
-    def __init__(self, parent: QObject | None = None, *, debounce_ms: int = 80) -> None:
+    def __init__(self, parent: QObject | None = None, *, debounce_ms: int = 40) -> None:
         super().__init__(parent)
         self._next_id = 0
         self._latest: dict[str, int] = {}  # kind -> id of the newest job

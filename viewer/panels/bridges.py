@@ -1,5 +1,8 @@
 """The Bridges dock: every candidate in a sortable table (quality, factors, endpoints, status).
 
+The "kept" and "why" columns: before a repair, kept = the line arrived; once a repair exists,
+kept = the repair's conflict resolution kept it, and "why" gives its reason otherwise.
+
 Selecting a row selects the bridge in the model (its line goes on the timeline and the
 inspector shows its factors); a selection made elsewhere (a click in the 3D view) selects the
 row.
@@ -12,30 +15,42 @@ from PySide6.QtCore import QAbstractTableModel, QModelIndex, QSortFilterProxyMod
 from PySide6.QtGui import QColor
 from PySide6.QtWidgets import QAbstractItemView, QHeaderView, QTableView, QVBoxLayout, QWidget
 
-from ..scene import STATUS_COLOURS, kept_mask
+from ..scene import STATUS_COLOURS, bridge_verdicts
 
 _ROOT = QModelIndex()
-COLUMNS = ("#", "status", "kept", "quality", "Q", "q_T", "q12", "q3", "q4", "start", "end", "steps", "length")
+COLUMNS = ("#", "status", "kept", "quality", "Q", "q_T", "q12", "q3", "q4", "start", "end", "steps", "length", "why")
+
+
+def _text(column: int, v) -> str:
+    if isinstance(v, float):
+        return "" if np.isnan(v) else f"{v:.4g}"
+    if column == 10 and v < 0:
+        return "-"
+    return str(v)
 
 
 class BridgeTableModel(QAbstractTableModel):
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
         self.rows: list[tuple] = []
+        self.text: list[tuple[str, ...]] = []  # what the cells show (formatted once per result)
         self.status: list[str] = []
 
-    def set_result(self, result) -> None:
+    def set_result(self, result, repair=None) -> None:
+        """Rows of a BridgeSet; kept / why from the repair when one is given (else: arrived)."""
         self.beginResetModel()
         self.rows, self.status = [], []
         if result is not None:
-            kept = kept_mask(result) if len(result.candidates) else np.zeros(0, bool)
+            kept, why = bridge_verdicts(result, repair)
             for i, c in enumerate(result.candidates):
                 f = c.factors
                 fac = (f.Q, f.qT, f.q12, f.q3, f.q4) if f is not None else (np.nan,) * 5
                 line = c.line
                 self.rows.append((i, line.status, "yes" if kept[i] else "no", float(c.quality), *map(float, fac),
-                                  int(line.start_vertex), int(line.end_vertex), int(line.steps), float(line.length)))
+                                  int(line.start_vertex), int(line.end_vertex), int(line.steps), float(line.length),
+                                  why[i]))
                 self.status.append(line.status)
+        self.text = [tuple(_text(c, v) for c, v in enumerate(row)) for row in self.rows]
         self.endResetModel()
 
     def rowCount(self, parent=_ROOT) -> int:  # noqa: N802
@@ -52,18 +67,14 @@ class BridgeTableModel(QAbstractTableModel):
     def data(self, index, role=Qt.DisplayRole):
         if not index.isValid():
             return None
-        v = self.rows[index.row()][index.column()]
         if role == Qt.DisplayRole:
-            if isinstance(v, float):
-                return "" if np.isnan(v) else f"{v:.4g}"
-            if index.column() == 10 and v < 0:
-                return "-"
-            return str(v)
+            return self.text[index.row()][index.column()]
+        v = self.rows[index.row()][index.column()]
         if role == Qt.UserRole:  # sort key
             return v
         if role == Qt.ForegroundRole and index.column() == 1:
             return QColor(STATUS_COLOURS.get(v, "#000000"))
-        if role == Qt.TextAlignmentRole and index.column() != 1:
+        if role == Qt.TextAlignmentRole and not isinstance(v, str):
             return int(Qt.AlignRight | Qt.AlignVCenter)
         return None
 
@@ -83,14 +94,24 @@ class BridgesPanel(QWidget):
         self.view.setSelectionBehavior(QAbstractItemView.SelectRows)
         self.view.setSelectionMode(QAbstractItemView.SingleSelection)
         self.view.verticalHeader().setVisible(False)
-        self.view.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeToContents)
+        self.view.horizontalHeader().setSectionResizeMode(QHeaderView.Interactive)
+        self._sized_for = -1  # columns are fitted to their contents when the row count changes
         lay = QVBoxLayout(self)
         lay.setContentsMargins(2, 2, 2, 2)
         lay.addWidget(self.view)
         self._syncing = False
-        model.resultChanged.connect(self.table_model.set_result)
+        model.resultChanged.connect(self._refresh)
+        model.repairChanged.connect(self._refresh)
         model.selectionChanged.connect(self.show_selection)
         self.view.selectionModel().selectionChanged.connect(self._row_selected)
+
+    def _refresh(self, *_) -> None:
+        self.table_model.set_result(self.model.result, self.model.repair)
+        n = self.table_model.rowCount()
+        if n != self._sized_for:
+            self._sized_for = n
+            self.view.resizeColumnsToContents()
+        self.show_selection(self.model.selection)
 
     def source_row(self, view_row: int) -> int:
         return self.proxy.mapToSource(self.proxy.index(view_row, 0)).row()

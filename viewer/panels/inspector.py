@@ -2,7 +2,9 @@
 
 For the force line on the timeline: the current step's point, normal, force and tension |H n|,
 how the line ended; for a selected bridge: its factors (q_T, q1, q2, q12, q3, q4, Q, eqs. 2-10)
-and its endpoints; for a clicked boundary point: its loop, Ω there.
+and its endpoints; for a clicked boundary point: its loop, Ω there; once a repair exists, its
+summary (class, bridges by kind, rejected candidates, holes split and darned, new faces) and the
+stage on the timeline.
 """
 
 from __future__ import annotations
@@ -35,6 +37,9 @@ class InspectorPanel(QWidget):
         model.frameChanged.connect(self.refresh)
         model.selectionChanged.connect(self.refresh)
         model.resultChanged.connect(self.refresh)
+        model.repairChanged.connect(self.refresh)
+        model.stageChanged.connect(self.refresh)
+        model.timelineModeChanged.connect(self.refresh)
         model.inputChanged.connect(self._clear_pick)
         self.refresh()
 
@@ -76,6 +81,19 @@ class InspectorPanel(QWidget):
             body = "".join(f"<tr><td>{k}</td><td align=right>{v:.4g}</td></tr>" if isinstance(v, float)
                            else f"<tr><td>{k}</td><td align=right>{v}</td></tr>" for k, v in rows)
             parts.append(f"<h4>Bridge {m.selection}</h4><table>{body}</table>")
+        r = m.repair
+        if r is not None:
+            darned = sum(h.split_by < 0 for h in r.holes)
+            split = sum(h.split_by >= 0 for h in r.holes)
+            kinds = ", ".join(f"{sum(b.kind == k for b in r.bridges)} {k}" for k in ("island", "tunnel", "split"))
+            stage = ""
+            if m.timeline_mode == "stages" and 0 <= m.stage < len(m.stages):
+                st = m.stages[m.stage]
+                stage = f"<br><b>stage {m.stage + 1} / {len(m.stages)}: {st.name}</b> — {st.description}"
+            parts.append(f"<h4>Repair ({r.class_found})</h4>{len(r.bridges)} bridges ({kinds}), "
+                         f"{len(r.rejected)} candidates rejected; {split} holes split, {darned} darned with "
+                         f"{r.params.darning}; {len(r.new_faces)} new faces; "
+                         f"{sum(r.timings.get(k, 0.0) for k in ('total',)) * 1000:.0f} ms{stage}")
         if not parts:
             parts.append("Click a boundary point in the 3D view to trace a force line from it; "
                          "select a bridge (3D view or table) to see its factors.")

@@ -1,4 +1,5 @@
-"""The Parameters dock: mode, k_i (slider and spin box), k_t, tracer, step, threshold, L_c.
+"""The Parameters dock: mode, k_i (slider and spin box), k_t, tracer, step, threshold, L_c, and
+the repair's darning method.
 
 Widgets write through the model (``ExplorerModel.set_params``); the model's ``paramsChanged``
 puts the values back in the widgets (undo/redo, sessions). A slider drag is one undo step.
@@ -16,12 +17,14 @@ from PySide6.QtWidgets import (
     QFormLayout,
     QHBoxLayout,
     QLabel,
+    QPushButton,
     QSlider,
     QVBoxLayout,
     QWidget,
 )
 
 from algorithms.params import MODES, TRACERS, FieldParams
+from algorithms.repair import DARNING
 
 from ..scene import LAYER_TITLES, LAYERS
 
@@ -93,6 +96,15 @@ class ParametersPanel(QWidget):
         self.lc.setToolTip("L_c, characteristic value of the discontinuity (auto: §6)")
         form.addRow("L_c", self.lc)
 
+        self.darning = QComboBox()
+        self.darning.addItems(DARNING)
+        self.darning.setToolTip("how the repair fills each simple hole: fan (the paper's), liepa (minimum-weight "
+                                "triangulation), liepa-fair (+ refinement and fairing). Used by Repair (F6).")
+        form.addRow("Darning", self.darning)
+        self.repair_button = QPushButton("Repair (F6)")
+        self.repair_button.setToolTip("run the repair pipeline; afterwards every edit recomputes it")
+        form.addRow("", self.repair_button)
+
         self.info = QLabel("")
         self.info.setWordWrap(True)
         outer.addWidget(self.info)
@@ -108,7 +120,10 @@ class ParametersPanel(QWidget):
         outer.addStretch(1)
 
         self.show_params(model.params)
+        self.show_darning(model.darning)
         model.paramsChanged.connect(self.show_params)
+        model.darningChanged.connect(self.show_darning)
+        self.darning.currentTextChanged.connect(self._darning_edited)
         self.mode.currentTextChanged.connect(lambda v: self._edit(mode=v))
         self.tracer.currentTextChanged.connect(lambda v: self._edit(tracer=v))
         self.ki_spin.valueChanged.connect(lambda v: self._edit(ki=round(float(v), 4)))
@@ -119,10 +134,6 @@ class ParametersPanel(QWidget):
         self.step.valueChanged.connect(lambda v: self._edit(step=float(v) if v > 0 else None))
         self.threshold.valueChanged.connect(lambda v: self._edit(threshold=float(v)))
         self.lc.valueChanged.connect(lambda v: self._edit(lc=float(v) if v > 0 else None))
-
-    def add_row(self, label: str, widget: QWidget) -> None:
-        """A place for later parameters (e.g. the repair pipeline's darning method)."""
-        self.form.addRow(label, widget)
 
     # ---------------------------------------------------------------- model -> widgets
     def show_params(self, p: FieldParams) -> None:
@@ -143,7 +154,19 @@ class ParametersPanel(QWidget):
             for w in widgets:
                 w.blockSignals(False)
 
+    def show_darning(self, darning: str) -> None:
+        self.darning.blockSignals(True)
+        self.darning.setCurrentText(darning)
+        self.darning.blockSignals(False)
+
     # ---------------------------------------------------------------- widgets -> model
+    def _darning_edited(self, value: str) -> None:
+        try:
+            self.model.set_darning(value)
+        except ValueError as exc:
+            self.invalid.emit(str(exc))
+            self.show_darning(self.model.darning)
+
     def _edit(self, **changes) -> None:
         try:
             p = replace(self.model.params, **changes)

@@ -10,7 +10,7 @@ from matplotlib.backends.backend_qtagg import FigureCanvasQTAgg
 from matplotlib.figure import Figure
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-MARKER_PERIOD = 0.2  # seconds between marker redraws while playing (matplotlib is slow)
+MARKER_PERIOD = 0.05  # seconds between marker moves while playing (blitted: cheap)
 
 
 class PlotPanel(QWidget):
@@ -24,7 +24,9 @@ class PlotPanel(QWidget):
         lay.setContentsMargins(2, 2, 2, 2)
         lay.addWidget(self.canvas)
         self._marker = None
+        self._background = None
         self._last_marker = 0.0
+        self.canvas.mpl_connect("draw_event", self._drawn)
         model.lineChanged.connect(self.plot_line)
         model.frameChanged.connect(self.mark)
         self.plot_line(None)
@@ -33,6 +35,7 @@ class PlotPanel(QWidget):
         ax = self.ax
         ax.clear()
         self._marker = None
+        self._background = None
         if line is None or line.steps == 0:
             ax.set_title("tension along the force line", fontsize=9)
             ax.text(0.5, 0.5, "no line", ha="center", va="center", transform=ax.transAxes)
@@ -42,11 +45,25 @@ class PlotPanel(QWidget):
             ax.set_ylabel("|H n|", fontsize=8)
             ax.set_title(f"tension along the line ({line.status})", fontsize=9)
             ax.tick_params(labelsize=7)
-            self._marker = ax.axvline(self.model.frame, color="#d62728", lw=1)
+            self._marker = ax.axvline(self.model.frame, color="#d62728", lw=1, animated=True)
         self.canvas.draw_idle()
 
+    def _drawn(self, _event) -> None:
+        """After a full draw: keep the background (without the marker) for blitting."""
+        self._background = self.canvas.copy_from_bbox(self.ax.bbox)
+        if self._marker is not None:
+            self.ax.draw_artist(self._marker)
+            self.canvas.blit(self.ax.bbox)
+
     def mark(self, k: int) -> None:
+        """Move the current-step marker: blitted over the kept background (no full redraw)."""
         if self._marker is None:
+            return
+        self._marker.set_xdata([k, k])
+        if not self.isVisible():
+            return
+        if self._background is None:
+            self.canvas.draw_idle()
             return
         now = time.perf_counter()
         line = self.model.line
@@ -54,14 +71,16 @@ class PlotPanel(QWidget):
         if now - self._last_marker < MARKER_PERIOD and not last and k != 0:
             return
         self._last_marker = now
-        self._marker.set_xdata([k, k])
-        self.canvas.draw_idle()
+        self.canvas.restore_region(self._background)
+        self.ax.draw_artist(self._marker)
+        self.canvas.blit(self.ax.bbox)
 
     def histogram(self, values, *, bins=36, title: str = "", xlabel: str = "", marks=()) -> None:
         """A histogram of values (e.g. minimum angles, degrees) with vertical marks."""
         ax = self.ax
         ax.clear()
         self._marker = None
+        self._background = None
         v = np.asarray(values, dtype=float)
         ax.hist(v[np.isfinite(v)], bins=bins, color="#4c78a8", edgecolor="white")
         for m in marks:

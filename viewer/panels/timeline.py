@@ -1,16 +1,17 @@
-"""The Timeline dock: replays a recorded force line step by step.
+"""The Timeline dock: replays what the algorithms recorded, step by step.
 
-Play/pause, step back/forward, first/last, speed (steps per second), loop, and a scrub slider.
-Frames are the line's recorded steps: nothing is recomputed. A stage list sits on the left: the
-field's force lines now; the repair pipeline adds its stages (bridges, hole splits, patches) with
-``add_stage``.
+Two modes on one timeline (the list on the left): "Force line" plays the recorded steps of the
+force line (selected bridge or traced line); "Repair stages" plays the repair's recorded stages
+(input, bridges appear, holes, holes split, then the patches filling hole by hole). Play/pause,
+step back/forward, first/last, speed, loop, and a scrub slider work in both. Nothing is
+recomputed.
 """
 
 from __future__ import annotations
 
 import time
 
-from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import (
     QCheckBox,
     QComboBox,
@@ -24,11 +25,12 @@ from PySide6.QtWidgets import (
 )
 
 TICK_MS = 16  # at most ~60 frames a second; faster speeds skip steps
+STAGE_RATE = 1 / 30  # stages per second per step/s of the speed box (60 steps/s: 2 stages/s)
+MODES = ("line", "stages")
+MODE_TITLES = ("Force line", "Repair stages")
 
 
 class TimelinePanel(QWidget):
-    stageChanged = Signal(str)
-
     def __init__(self, model, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.model = model
@@ -41,11 +43,13 @@ class TimelinePanel(QWidget):
 
         lay = QHBoxLayout(self)
         lay.setContentsMargins(4, 2, 4, 2)
-        self.stage = QComboBox()
-        self.stage.addItem("Force lines")
-        self.stage.setToolTip("what the timeline plays (the repair pipeline adds its stages here)")
-        self.stage.currentTextChanged.connect(self.stageChanged)
-        lay.addWidget(self.stage)
+        self.mode = QComboBox()
+        self.mode.addItems(MODE_TITLES)
+        self.mode.setToolTip("what the timeline plays: the force line's steps, or the repair's stages "
+                             "(after Repair, F6)")
+        self.mode.model().item(1).setEnabled(False)
+        self.mode.currentIndexChanged.connect(lambda i: self.model.set_timeline_mode(MODES[i]))
+        lay.addWidget(self.mode)
         st = self.style()
 
         def button(icon, tip, slot):
@@ -79,29 +83,80 @@ class TimelinePanel(QWidget):
 
         model.lineChanged.connect(self._line_changed)
         model.frameChanged.connect(self._frame_changed)
+        model.repairChanged.connect(self._repair_changed)
+        model.stageChanged.connect(self._stage_changed)
+        model.timelineModeChanged.connect(self._mode_changed)
 
-    def add_stage(self, name: str) -> None:
-        self.stage.addItem(name)
+    # ---------------------------------------------------------------- the mode's frames
+    @property
+    def stages_mode(self) -> bool:
+        return self.model.timeline_mode == "stages"
+
+    def count(self) -> int:
+        """Frames of what the timeline plays now (steps of the line, or stages)."""
+        if self.stages_mode:
+            return len(self.model.stages)
+        return self.model.line.steps if self.model.line is not None else 0
+
+    def current(self) -> int:
+        return self.model.stage if self.stages_mode else self.model.frame
+
+    def goto(self, k: int) -> None:
+        (self.model.set_stage if self.stages_mode else self.model.set_frame)(k)
 
     # ---------------------------------------------------------------- model -> widgets
-    def _line_changed(self, line) -> None:
-        n = line.steps if line is not None else 0
+    def _set_range(self) -> None:
+        n = self.count()
         self.slider.blockSignals(True)
         self.slider.setRange(0, max(0, n - 1))
+        self.slider.setValue(self.current())
         self.slider.blockSignals(False)
         if n == 0:
             self.pause()
-            self.label.setText("no line")
+            self.label.setText("no line" if not self.stages_mode else "no repair")
+
+    def _line_changed(self, line) -> None:
+        if not self.stages_mode:
+            self._set_range()
 
     def _frame_changed(self, k: int) -> None:
+        if self.stages_mode:
+            return
         self.slider.blockSignals(True)
         self.slider.setValue(k)
         self.slider.blockSignals(False)
-        n = self.model.line.steps if self.model.line is not None else 0
+        n = self.count()
         self.label.setText(f"step {k} / {max(0, n - 1)}" if n else "no line")
 
+    def _repair_changed(self, repair) -> None:
+        self.mode.model().item(1).setEnabled(repair is not None)
+        if self.stages_mode:
+            self._set_range()
+
+    def _stage_changed(self, k: int) -> None:
+        if not self.stages_mode:
+            return
+        self.slider.blockSignals(True)
+        self.slider.setValue(k)
+        self.slider.blockSignals(False)
+        st = self.model.stages
+        if 0 <= k < len(st):
+            self.label.setText(f"stage {k + 1} / {len(st)}: {st[k].name}")
+            self.label.setToolTip(st[k].description)
+
+    def _mode_changed(self, mode: str) -> None:
+        self.pause()
+        self.mode.blockSignals(True)
+        self.mode.setCurrentIndex(MODES.index(mode))
+        self.mode.blockSignals(False)
+        self._set_range()
+        if mode == "stages":
+            self._stage_changed(self.model.stage)
+        else:
+            self._frame_changed(self.model.frame)
+
     def _scrubbed(self, v: int) -> None:
-        self.model.set_frame(v)
+        self.goto(v)
 
     # ---------------------------------------------------------------- transport
     @property
@@ -109,11 +164,11 @@ class TimelinePanel(QWidget):
         return self.timer.isActive()
 
     def play(self) -> None:
-        line = self.model.line
-        if line is None or line.steps < 2:
+        n = self.count()
+        if n < 2:
             return
-        if self.model.frame >= line.steps - 1:
-            self.model.set_frame(0)
+        if self.current() >= n - 1:
+            self.goto(0)
         self._t_last = time.perf_counter()
         self._acc = 0.0
         self.timer.start(TICK_MS)
@@ -127,34 +182,35 @@ class TimelinePanel(QWidget):
         self.pause() if self.playing else self.play()
 
     def first(self) -> None:
-        self.model.set_frame(0)
+        self.goto(0)
 
     def last(self) -> None:
-        if self.model.line is not None:
-            self.model.set_frame(self.model.line.steps - 1)
+        if self.count():
+            self.goto(self.count() - 1)
 
     def step_forward(self) -> None:
         self.pause()
-        self.model.set_frame(self.model.frame + 1)
+        self.goto(self.current() + 1)
 
     def step_back(self) -> None:
         self.pause()
-        self.model.set_frame(self.model.frame - 1)
+        self.goto(self.current() - 1)
 
     def _tick(self) -> None:
-        line = self.model.line
-        if line is None:
+        n = self.count()
+        if n == 0:
             self.pause()
             return
         now = time.perf_counter()
-        self._acc += (now - self._t_last) * self.speed.value()
+        rate = self.speed.value() * (STAGE_RATE if self.stages_mode else 1.0)
+        self._acc += (now - self._t_last) * rate
         self._t_last = now
         adv = int(self._acc)
         if adv < 1:
             return
         self._acc -= adv
-        k = self.model.frame + adv
-        last = line.steps - 1
+        k = self.current() + adv
+        last = n - 1
         if k >= last:
             if self.loop.isChecked():
                 k = k % (last + 1) if k > last else k
@@ -162,4 +218,4 @@ class TimelinePanel(QWidget):
                 k = last
                 self.pause()
         self.frames_shown += 1
-        self.model.set_frame(k)
+        self.goto(k)
