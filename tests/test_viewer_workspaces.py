@@ -11,6 +11,7 @@ pytest.importorskip("pytestqt")
 import re  # noqa: E402
 
 from algorithms.demos import demo  # noqa: E402
+from algorithms.frep.pipeline import FrepParams  # noqa: E402
 from viewer.workspaces import FrepWorkspace, HybridWorkspace, open_workspace  # noqa: E402
 
 pytestmark = pytest.mark.gui
@@ -176,6 +177,14 @@ def test_frep_stages_on_the_timeline_with_metrics_and_pixels(qtbot):
     qtbot.waitUntil(lambda: w.current is not run and not w.busy, timeout=30_000)
     assert w.current.params.qlev == 5
     assert w.current.result.metrics.faces > m.faces
+    # "Even out" 0 = the paper's pipeline: same vertices, less even edges than the default
+    evened = w.current
+    assert evened.params.smooth == FrepParams.smooth > 0
+    w.smooth_spin.setValue(0)
+    qtbot.waitUntil(lambda: w.current is not evened and not w.busy, timeout=30_000)
+    assert w.current.params.smooth == 0
+    assert w.current.result.metrics.vertices == evened.result.metrics.vertices
+    assert w.current.result.metrics.edge_cv > evened.result.metrics.edge_cv
     _close(qtbot, w)
 
 

@@ -52,7 +52,7 @@ STAGE_TITLES = {
     "filled": "holes filled (minimum-weight, patches highlighted)",
     "region": "merged with the side faces (region to refine highlighted)",
     "refined": "refined: centroid splits + edge flips (new faces highlighted)",
-    "faired": "faired (U2 = 0) and projected: the result",
+    "faired": "faired (U2 = 0), projected and evened out (valence flips + CVT relaxation): the result",
 }
 PLAIN, HIGHLIGHT = "#c9d6df", "#f39c4a"
 
@@ -233,7 +233,13 @@ class FrepWorkspace(QWidget):
         self.refine_check = QCheckBox("refine the filled region")
         self.refine_check.setChecked(True)
         form.addRow(self.refine_check)
-        for s in (self.qlev_spin, self.blev_spin):
+        self.smooth_spin = QSpinBox()
+        self.smooth_spin.setRange(0, 100)
+        self.smooth_spin.setValue(FrepParams.smooth)
+        self.smooth_spin.setToolTip("Rounds of isotropic improvement (valence flips + tangential CVT relaxation, "
+                                    "each projected onto F = 0); 0 = the paper's pipeline")
+        form.addRow("Even out", self.smooth_spin)
+        for s in (self.qlev_spin, self.blev_spin, self.smooth_spin):
             s.valueChanged.connect(self._params_changed)
         for c in (self.weight_combo, self.fairing_combo):
             c.currentIndexChanged.connect(self._params_changed)
@@ -293,7 +299,7 @@ class FrepWorkspace(QWidget):
     def params(self) -> FrepParams:
         return FrepParams(qlev=self.qlev_spin.value(), blev=self.blev_spin.value(),
                           weight=self.weight_combo.currentText(), fairing=self.fairing_combo.currentText(),
-                          refine=self.refine_check.isChecked())
+                          refine=self.refine_check.isChecked(), smooth=self.smooth_spin.value())
 
     def _params_changed(self, *_args) -> None:
         self._recompute_timer.start()
