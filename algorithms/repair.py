@@ -593,6 +593,7 @@ def _straight_bridge(V: NDArray[np.float64], N: NDArray[np.float64], polygon: tu
 def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operator: str) -> tuple[NDArray, str]:
     """Fair the new vertices with the input fixed; fall back to lower orders / uniform weights
     when the system is singular (a free region without enough fixed rings around it)."""
+    from .darning import plausible
     from .darning.fair import fair
 
     free = np.arange(n_input, len(V))
@@ -602,7 +603,7 @@ def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operat
             out = fair(V, F, free, operator=op, weights=w)
         except (RuntimeError, ValueError, np.linalg.LinAlgError):
             continue
-        if np.all(np.isfinite(out)):
+        if plausible(out[free], V[free]):  # finite and near the unfaired patches
             return out, f"{op} {w}"
     return V, "none (every fairing system was singular)"
 

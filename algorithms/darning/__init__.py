@@ -184,14 +184,30 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
                 splits += r.splits
                 flips += r.flips
             free = np.arange(nv, len(P))
-            P = fair(P, np.vstack([around, pf]), free, operator=fairing, weights=fair_weights, bare=bare,
-                     iterations=fair_iterations)
+            faired = fair(P, np.vstack([around, pf]), free, operator=fairing, weights=fair_weights, bare=bare,
+                          iterations=fair_iterations)
+            if not plausible(faired[free], v[lp]):
+                break  # a folded patch makes the system near-singular: keep the refined patch
+            P = faired
             if smooth:
                 P = tangential_relax(P, np.vstack([around, pf]), free, iterations=smooth)
             if k or smooth:
                 pf, nflip = relax(P, pf, ring)
                 flips += nflip
     return Patch(P[nv:], pf, lp, method, weight, splits, flips)
+
+
+def plausible(points: NDArray[np.float64], border: NDArray[np.float64], *, reach: float = 1.0) -> bool:
+    """Whether faired patch vertices stay near their hole: finite, and within ``reach`` times the
+    border's diameter of the border's bounding box (a smooth cap over a hole bulges by a fraction of
+    its width; a near-singular system throws vertices far away)."""
+    if not len(points):
+        return True
+    if not np.all(np.isfinite(points)):
+        return False
+    lo, hi = border.min(axis=0), border.max(axis=0)
+    pad = reach * float(np.linalg.norm(hi - lo))
+    return bool(np.all(points >= lo - pad) and np.all(points <= hi + pad))
 
 
 def _outside_normals(v: NDArray[np.float64], ring: NDArray[np.int64], lp: NDArray[np.int64]) -> NDArray[np.float64]:
