@@ -307,7 +307,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 why = "would join two holes of one surface (a handle the tunnel rule does not support)"
             if why is None:
                 keep(b, ln)
-                guard.refresh(bridges, chains)
+                guard.add(b)
             else:
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
@@ -316,14 +316,14 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             comps = list(guard.components().values())
             if len(comps) < 2:
                 break
-            sb = _join_components(work.V(), work.N(), frames, comps, lc_used, params.field.ki)
+            sb = _join_components(work.V(), frames, comps, lc_used, params.field.ki)
             if sb is None:
                 break
             ia, ib, q = sb
             b = Bridge(ia, ib, resample_chain(np.vstack([mesh.vertices[ia], mesh.vertices[ib]]), spacing), q,
                        "island")
             keep(b, None)
-            guard.refresh(bridges, chains)
+            guard.add(b)
             notes.append(f"islands {sorted(comps[0])} joined by a straight bridge: no force line joined them")
     timings["bridges"] = time.perf_counter() - t0
 
@@ -517,10 +517,33 @@ def _neighbourhood(V: NDArray[np.float64], F: NDArray[np.int64], poly: tuple[int
     return V[glob], remap[F[fmask]], glob
 
 
-def _join_components(V: NDArray[np.float64], N: NDArray[np.float64], frames: list, comps: list[list[int]],
-                     lc: float, ki: float) -> tuple[int, int, float] | None:
-    """The best straight bridge from the first component's loops to any other component's loops
-    (straight-bridge quality of spec §3, as in _straight_bridge)."""
+def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: NDArray[np.float64],
+                          pb: NDArray[np.float64], tb: NDArray[np.float64], lc: float, ki: float,
+                          kernel: str = "gauss") -> tuple[int, int, float]:
+    """The best straight bridge from a point of set A to a point of set B: (index in A, index in B, Q).
+
+    The straight-bridge quality of spec §3 with n_X = the surface normal at A, from
+    algorithms.field.quality: s_A, s_B (1a, 1b), q_T = s_A . s_B (2) > 0 required,
+    Q = q_T q1(L) (1 + k_i q4) (3, 9) with q4 (7) at A. When no pair is compatible (q_T <= 0
+    everywhere), the shortest pair, with Q = 0.
+    """
+    from .field.quality import q1, q4, q_topological, s_vectors
+
+    a, b = pa[:, None, :], pb[None, :, :]
+    sa, _ = s_vectors(a, ta[:, None, :], b, tb[None, :, :])  # (1a), (1b)
+    qt = q_topological(a, ta[:, None, :], b, tb[None, :, :])  # (2)
+    L = np.linalg.norm(b - a, axis=2)
+    Q = np.where(qt > 0, qt * q1(L, max(lc, 1e-12), kernel) * (1 + ki * q4(sa, na[:, None, :])), -np.inf)  # (9)
+    i, j = np.unravel_index(int(np.argmax(Q)), Q.shape)
+    if not np.isfinite(Q[i, j]):
+        i, j = np.unravel_index(int(np.argmin(L)), L.shape)
+        return int(i), int(j), 0.0
+    return int(i), int(j), float(Q[i, j])
+
+
+def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]], lc: float,
+                     ki: float) -> tuple[int, int, float] | None:
+    """The best straight bridge from the first component's loops to any other component's loops."""
     first = set(comps[0])
     a_fr = [f for f in frames if f.island in first]
     b_fr = [f for f in frames if f.island not in first]
@@ -528,21 +551,10 @@ def _join_components(V: NDArray[np.float64], N: NDArray[np.float64], frames: lis
         return None
     A = np.concatenate([f.vertices for f in a_fr])
     B = np.concatenate([f.vertices for f in b_fr])
-    ta = np.concatenate([f.tangent for f in a_fr])
-    tb = np.concatenate([f.tangent for f in b_fr])
-    na = np.concatenate([f.normal for f in a_fr])
-    d = V[B][None, :, :] - V[A][:, None, :]
-    L = np.linalg.norm(d, axis=2)
-    u = d / np.maximum(L, 1e-300)[..., None]
-    sa = np.cross(u, ta[:, None, :])  # (1a)
-    sb = np.cross(-u, tb[None, :, :])  # (1b)
-    qT = np.einsum("ijk,ijk->ij", sa, sb)  # (2)
-    q4 = (1 + np.einsum("ijk,ijk->ij", sa, na[:, None, :])) / 2  # (7)
-    Q = np.where(qT > 0, qT * np.exp(-(L / max(lc, 1e-12)) ** 2) * (1 + ki * q4), -np.inf)  # (9)
-    i, j = np.unravel_index(int(np.argmax(Q)), Q.shape)
-    if not np.isfinite(Q[i, j]):
-        i, j = np.unravel_index(int(np.argmin(L)), L.shape)
-    return int(A[i]), int(B[j]), float(Q[i, j]) if np.isfinite(Q[i, j]) else 0.0
+    i, j, q = _best_straight_bridge(V[A], np.concatenate([f.tangent for f in a_fr]),
+                                    np.concatenate([f.normal for f in a_fr]), V[B],
+                                    np.concatenate([f.tangent for f in b_fr]), lc, ki)
+    return int(A[i]), int(B[j]), q
 
 
 def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:
@@ -568,26 +580,15 @@ def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:
 def _straight_bridge(V: NDArray[np.float64], N: NDArray[np.float64], polygon: tuple[int, ...],
                      lc: float, ki: float) -> tuple[int, int, float] | None:
     """The best straight bridge between the two sides of a non-disk walk (positions i, j and its
-    quality), scored by the straight-bridge quality of spec §3 with n_X = the surface normal:
-    q_T (2) > 0 required, Q ~ q_T q1(L) (1 + k_i q4) (9)."""
+    quality, :func:`_best_straight_bridge`)."""
     sides = _sides(polygon)
     if sides is None:
         return None
     s1, s2 = (np.asarray(x) for x in sides)
     fr = polygon_frame(V, N, polygon)
-    a, b = fr.points[s1][:, None, :], fr.points[s2][None, :, :]
-    d = b - a
-    L = np.linalg.norm(d, axis=2)
-    u = d / np.maximum(L, 1e-300)[..., None]
-    sa = np.cross(u, fr.tangent[s1][:, None, :])  # (1a)
-    sb = np.cross(-u, fr.tangent[s2][None, :, :])  # (1b)
-    qT = np.einsum("ijk,ijk->ij", sa, sb)  # (2)
-    q4 = (1 + np.einsum("ijk,ijk->ij", sa, fr.normal[s1][:, None, :])) / 2  # (7) at the start
-    Q = np.where(qT > 0, qT * np.exp(-(L / max(lc, 1e-12)) ** 2) * (1 + ki * q4), -np.inf)  # (3), (9)
-    i, j = np.unravel_index(int(np.argmax(Q)), Q.shape)
-    if not np.isfinite(Q[i, j]):
-        i, j = np.unravel_index(int(np.argmin(L)), L.shape)  # no compatible pair: the shortest
-    return int(s1[i]), int(s2[j]), float(Q[i, j]) if np.isfinite(Q[i, j]) else 0.0
+    i, j, q = _best_straight_bridge(fr.points[s1], fr.tangent[s1], fr.normal[s1], fr.points[s2], fr.tangent[s2],
+                                    lc, ki)
+    return int(s1[i]), int(s2[j]), q
 
 
 def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operator: str) -> tuple[NDArray, str]:

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..mesh import Mesh
+from ..mesh import Mesh, _frozen
 from ..topology import boundary_halfedges, boundary_loops, halfedges
 from .fair import ORDERS, WEIGHTINGS, fair, tangential_relax
 from .fan import fan
@@ -44,12 +44,6 @@ FAIRINGS = ("U2", "U1", "U3")
 
 __all__ = ["METHODS", "DEFAULT_METHOD", "WEIGHTS", "FAIRINGS", "Patch", "darn", "fill_holes", "apply_patch",
            "triangulate", "fan", "refine", "relax", "fair"]
-
-
-def _ro(a: NDArray, dtype: type) -> NDArray:
-    out = np.array(a, dtype=dtype, copy=True)
-    out.setflags(write=False)
-    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,9 +66,9 @@ class Patch:
     flips: int = 0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "new_vertices", _ro(np.reshape(self.new_vertices, (-1, 3)), np.float64))
-        object.__setattr__(self, "faces", _ro(np.reshape(self.faces, (-1, 3)), np.int64))
-        object.__setattr__(self, "loop", _ro(self.loop, np.int64))
+        object.__setattr__(self, "new_vertices", _frozen(np.reshape(self.new_vertices, (-1, 3)), np.float64))
+        object.__setattr__(self, "faces", _frozen(np.reshape(self.faces, (-1, 3)), np.int64))
+        object.__setattr__(self, "loop", _frozen(self.loop, np.int64))
 
 
 def apply_patch(vertices: NDArray[np.float64], faces: NDArray[np.int64],
