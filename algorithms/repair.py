@@ -482,6 +482,14 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
 
         V, fairing_used = _fair_new(V, F, n_input, params.fairing)
         timings_note["fairing"] = fairing_used
+        # the patches were darned one by one and the bridge chains moved in the fairing: Delaunay
+        # edge flips over all new faces together (input faces fixed) let edges cross the chains
+        from .darning import relax
+
+        fixed = F[:n_before]
+        ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
+        patch, _ = relax(V, F[n_before:], ring)
+        F = np.vstack([fixed, patch])
     timings["darn"] = time.perf_counter() - t0
     new_faces = np.arange(n_before, len(F))
     stages.append(Stage("darned", f"{len(final)} holes darned with {params.darning}: {len(F) - n_before} new faces",
