@@ -33,6 +33,7 @@ from .bridge_graph import (
     split_polygon,
     walk_holes,
 )
+from .creases import CreaseEnds, crease_corner, crease_ends, crease_split, hermite
 from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
 from .metrics import angle_stats, min_angles, topology
@@ -55,6 +56,7 @@ class RepairParams:
     spacing_factor: float = 1.0  # bridge chain spacing = factor x mean boundary edge length
     clearance_factor: float = 1.5  # bridges keep this many chain spacings apart
     neighbourhood_factor: float = 1.0  # same-neighbourhood radius = factor x L_c
+    crease_angle: float = 40.0  # sharp input edges (dihedral above, degrees) are continued across holes; 180: off
 
     def __post_init__(self) -> None:
         if self.tunnels not in TUNNELS:
@@ -65,6 +67,8 @@ class RepairParams:
             raise ValueError(f"parameter fairing={self.fairing!r}: must be U1, U2 or U3")
         if self.weight not in ("area", "length"):
             raise ValueError(f"parameter weight={self.weight!r}: must be 'area' or 'length'")
+        if not (0 < self.crease_angle <= 180):
+            raise ValueError(f"parameter crease_angle={self.crease_angle!r}: must be in (0, 180]")
         if not (0 <= self.max_split_depth <= 64):
             raise ValueError(f"parameter max_split_depth={self.max_split_depth!r}: must be in 0..64")
         for name in ("spacing_factor", "clearance_factor", "neighbourhood_factor"):
@@ -138,7 +142,7 @@ class RepairResult:
                                     for s in self.model.set_aside]},
             "bridges": {
                 "count": len(self.bridges),
-                "by_kind": {k: sum(b.kind == k for b in self.bridges) for k in ("island", "tunnel", "split")},
+                "by_kind": {k: sum(b.kind == k for b in self.bridges) for k in ("island", "tunnel", "split", "crease")},
                 "qualities": [b.quality for b in self.bridges],
                 "kept": [{"kind": b.kind, "from_vertex": b.start, "to_vertex": b.end, "quality": b.quality,
                           "chain_vertices": int(len(b.points))} for b in self.bridges],
@@ -407,11 +411,26 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                                                      for h in holes]
     final: list[tuple[int, ...]] = []
     any_complex = False
+    ends = crease_ends(mesh.vertices, mesh.faces, params.crease_angle) if params.crease_angle < 180 else None
+    pinned: list[NDArray[np.int64]] = []  # crease chain vertices: the fairing keeps them where they are
+    locked: list[NDArray[np.int64]] = []  # crease chain edges: never flipped
     while queue:
         step(0.5, f"splitting complex holes ({len(queue)} to check)")
         poly, origin, depth = queue.pop(0)
         V, N = work.V(), work.N()
         verdict = classify_hole(V[list(poly)], N[list(poly)], test)
+        if ends is not None and len(set(poly)) == len(poly):
+            halves = _continue_creases(work, poly, ends, spacing)
+            if halves is not None:
+                new_bridges, parts, chain_ids = halves
+                for b in new_bridges:
+                    bridges.append(b)
+                records.append(HoleRecord(poly, verdict, origin, len(bridges) - 1, "a sharp crease continued"))
+                queue += [(pt, "crease", depth) for pt in parts]
+                pinned += chain_ids
+                locked += [np.stack([c[:-1], c[1:]], axis=1) for c in
+                           (np.r_[b.start, ids, b.end] for b, ids in zip(new_bridges, chain_ids))]
+                continue
         if len(set(poly)) != len(poly):
             verdict = HoleVerdict(False, verdict.reasons + ("not a disk (a vertex is walked twice)",),
                                   verdict.vertices, verdict.flatness, verdict.normal_agreement, verdict.radius)
@@ -463,32 +482,45 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     timings_note: dict[str, str] = {}
     n_before = len(work.F())
     n_input = model.mesh.n_vertices
+    on_crease = np.zeros(work.n, dtype=bool)
+    for ids in pinned:
+        on_crease[ids] = True
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
         V, F = work.V(), work.F()
         # darn on the neighbourhood of the hole only (three rings of faces, compact indices),
-        # so the cost of a hole does not grow with the size of the intact surface (spec (17))
+        # so the cost of a hole does not grow with the size of the intact surface (spec (17));
+        # patches across a continued crease are left out: each side is faired as its own surface
         sub_v, sub_f, glob = _neighbourhood(V, F, poly, rings=3)
+        apart = np.zeros(len(sub_f), dtype=bool)
+        if on_crease.any():
+            mask = np.zeros(len(V), dtype=bool)
+            mask[:len(on_crease)] = on_crease
+            apart = mask[glob[sub_f]].any(axis=1)
         local = {int(g): k for k, g in enumerate(glob)}
-        patch = darn(sub_v, sub_f, np.asarray([local[p] for p in poly], dtype=np.int64),
-                     method=params.darning, weight=params.weight)
+        patch = darn(sub_v, sub_f[~apart], np.asarray([local[p] for p in poly], dtype=np.int64),
+                     method=params.darning, weight=params.weight, apart=sub_f[apart])
         ids = work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
         to_global = np.concatenate([glob, ids])
         work.faces.append(to_global[np.asarray(patch.faces, dtype=np.int64)])
+        if on_crease[list(poly)].any():
+            pinned.append(ids)  # faired by darn on its side of the crease; the global fairing keeps it
     V, F = work.V(), work.F()
     if params.darning == "liepa-fair" and len(V) > n_input:
         # fair every new vertex together (patch interiors and bridge chains), the input fixed:
         # the force lines chose the topology; the final shape is the smoothest continuation
 
-        V, fairing_used = _fair_new(V, F, n_input, params.fairing)
+        keep_still = np.concatenate(pinned) if pinned else np.zeros(0, dtype=np.int64)
+        V, fairing_used = _fair_new(V, F, n_input, params.fairing, keep_still)
         timings_note["fairing"] = fairing_used
         # the patches were darned one by one and the bridge chains moved in the fairing: Delaunay
         # edge flips over all new faces together (input faces fixed) let edges cross the chains
+        # (not the crease chains)
         from .darning import relax
 
         fixed = F[:n_before]
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
-        patch, _ = relax(V, F[n_before:], ring)
+        patch, _ = relax(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None)
         F = np.vstack([fixed, patch])
     timings["darn"] = time.perf_counter() - t0
     new_faces = np.arange(n_before, len(F))
@@ -565,6 +597,48 @@ def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]
     return int(A[i]), int(B[j]), q
 
 
+def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spacing: float
+                      ) -> tuple[list[Bridge], list[tuple[int, ...]], list[NDArray[np.int64]]] | None:
+    """Split ``poly`` along the sharp creases it interrupts (algorithms.creases): a corner where
+    three creases meet (two chains through the corner point), else the best pair of crease ends.
+    Returns (bridges, the resulting hole polygons, each bridge's chain vertex ids), or None.
+    Each crease end is used once (it is removed from ``ends``)."""
+    V = work.V()
+
+    def chain(i: int, j: int, pts: NDArray[np.float64], q: float, p: tuple[int, ...]):
+        N = work.N()
+        nrm = (N[p[i]] + N[p[j]]) / 2
+        ids = work.add_vertices(pts, np.repeat(nrm[None], len(pts), axis=0))
+        return Bridge(int(p[i]), int(p[j]), pts, q, "crease"), ids
+
+    straight = crease_split(V, poly, ends, spacing)
+    if straight is not None:
+        b, ids = chain(straight.i, straight.j, straight.points, straight.quality, poly)
+        for v in (poly[straight.i], poly[straight.j]):
+            ends.use(v)
+        return [b], list(split_polygon(poly, straight.i, straight.j, ids)), [ids]
+    corner = crease_corner(V, poly, ends, spacing) or crease_corner(V, poly, ends, spacing, rays=2)
+    if corner is None:
+        return None
+    cs, k, C = corner
+    b1, ids1 = chain(cs.i, cs.j, cs.points, cs.quality, poly)
+    a, c = split_polygon(poly, cs.i, cs.j, ids1)
+    if k < 0:  # two rays: the crease turns at C
+        for v in (poly[cs.i], poly[cs.j]):
+            ends.use(v)
+        return [b1], [a, c], [ids1]
+    vk = poly[k]
+    c_id = int(ids1[int(np.argmin(np.linalg.norm(cs.points - C, axis=1)))])
+    half, other = (a, c) if vk in a else (c, a)
+    i, j = half.index(vk), half.index(c_id)
+    dk = next(d for p, d, _ in ends.at(poly) if p == k)
+    b2, ids2 = chain(i, j, hermite(V[vk], dk, C, dk, spacing), cs.quality, half)
+    h1, h2 = split_polygon(half, i, j, ids2)
+    for v in (poly[cs.i], poly[cs.j], vk):
+        ends.use(v)
+    return [b1, b2], [other, h1, h2], [ids1, ids2]
+
+
 def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:
     """The two sides of a walk that passes some vertex twice: positions between the two passes,
     and the rest; vertices walked twice (the doubly used bridge) belong to neither."""
@@ -599,13 +673,15 @@ def _straight_bridge(V: NDArray[np.float64], N: NDArray[np.float64], polygon: tu
     return int(s1[i]), int(s2[j]), q
 
 
-def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operator: str) -> tuple[NDArray, str]:
-    """Fair the new vertices with the input fixed; fall back to lower orders / uniform weights
-    when the system is singular (a free region without enough fixed rings around it)."""
+def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operator: str,
+              keep_still: NDArray[np.int64] | None = None) -> tuple[NDArray, str]:
+    """Fair the new vertices (except ``keep_still``) with the input fixed; fall back to lower
+    orders / uniform weights when the system is singular (a free region without enough fixed rings
+    around it)."""
     from .darning import plausible
     from .darning.fair import fair
 
-    free = np.arange(n_input, len(V))
+    free = np.setdiff1d(np.arange(n_input, len(V)), keep_still if keep_still is not None else [])
     tries = [(operator, "cotan"), ("U2", "cotan"), ("U2", "uniform"), ("U1", "uniform")]
     for op, w in tries[tries.index((operator, "cotan")) if (operator, "cotan") in tries else 0:]:
         try:

@@ -374,8 +374,8 @@ def markdown(rows: list[dict], cases: list[BenchCase], notes: list[str], samples
         "in the output; distances both ways, exact point-to-surface over "
         f"{samples} samples a side, in % of the truth's bounding-box diagonal; patch = output faces that are "
         "not input faces (min angle, share of patch triangles with a min angle below 20°); time = the tool's "
-        "call only (ours includes normalisation; our numba kernels are compiled or loaded once in the parent "
-        "process before any timing, as an installed copy would have them cached).",
+        "call only (ours includes normalisation and loading numba's cached kernels; they are compiled into the "
+        "cache by a warm-up run before any timing, as an installed copy would have them).",
         "",
         case_lines,
         "",
@@ -401,16 +401,19 @@ def markdown(rows: list[dict], cases: list[BenchCase], notes: list[str], samples
     return "\n".join(parts)
 
 
-def warm_up(usable: dict[str, Peer]) -> None:
-    """Run our methods once in this process on a small demo case before timing anything: the numba
-    kernels are compiled (or loaded from their cache) here, and every forked child inherits them,
-    so no row's time includes a one-time compilation."""
+def warm_up(usable: dict[str, Peer], timeout: float) -> None:
+    """Run our methods once on a small demo case before timing anything, in a forked child like
+    every row (numba's parallel kernels must not start their threads in the parent that forks):
+    that compiles the kernels into numba's on-disk cache if it is stale, so no row's time includes
+    a one-time compilation (each row still loads the cached kernels, as a fresh command would)."""
     from algorithms import cases as gen
 
-    small = gen.demo_cases()[0].incomplete
+    c = gen.demo_cases()[0]
+    small = BenchCase("warm-up", np.asarray(c.incomplete.vertices), np.asarray(c.incomplete.faces), np.zeros((0, 3)),
+                      c.truth, 0, "")
     for label, fn in usable.items():
         if label.startswith("bridgefield"):
-            fn(np.asarray(small.vertices), np.asarray(small.faces), np.zeros((0, 3)))
+            run_isolated(fn, small, timeout)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -445,7 +448,7 @@ def main(argv: list[str] | None = None) -> int:
         usable[label] = fn
     rows = json.loads(Path(args.from_json).read_text()) if args.from_json else []
     if not args.from_json:
-        warm_up(usable)
+        warm_up(usable, args.timeout)
     for case in [] if args.from_json else cases:
         for label, fn in usable.items():
             status, res = run_isolated(fn, case, args.timeout)

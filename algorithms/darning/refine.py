@@ -60,14 +60,15 @@ def _angle_at(p: NDArray[np.float64], apex: NDArray[np.int64], a: NDArray[np.int
 
 
 def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: NDArray[np.int64], *,
-          max_passes: int = 200) -> tuple[NDArray[np.int64], int]:
+          max_passes: int = 200, locked: NDArray[np.int64] | None = None) -> tuple[NDArray[np.int64], int]:
     """Delaunay edge flips on the patch-interior edges until none flips.
 
     One pass flips an independent set of violating edges at once (each face takes part in at
     most one flip: every face picks its most violating edge, an edge flips when both its faces
     picked it, so the worst edge always flips). A flip is refused when the new edge already
     exists (it would be non-manifold) or when a new face would fold over (its normal opposes the
-    quad's). Returns (faces, number of flips).
+    quad's). ``locked`` (K, 2): edges that never flip (e.g. a continued crease). Returns (faces,
+    number of flips).
     """
     p = np.asarray(vertices, dtype=np.float64)
     f = np.array(patch, dtype=np.int64, copy=True)
@@ -75,6 +76,8 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
     nv = len(p)
     fixed_keys = (np.unique(np.sort(halfedges(fixed), axis=1) @ np.array([nv, 1])) if len(fixed)
                   else np.zeros(0, np.int64))
+    locked_keys = (np.unique(np.sort(np.asarray(locked, dtype=np.int64), axis=1) @ np.array([nv, 1]))
+                   if locked is not None and len(locked) else np.zeros(0, np.int64))
     total = 0
     active = np.ones(len(f), dtype=bool)  # faces a flip may involve (after a pass: the flipped ones)
 
@@ -106,7 +109,7 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
         alpha = _angle_at(p, c, a, b)
         beta = _angle_at(p, d, a, b)
         score = alpha + beta - np.pi
-        ok = (score > 1e-9) & (c != d)
+        ok = (score > 1e-9) & (c != d) & ~_has(locked_keys, np.minimum(a, b) * nv + np.maximum(a, b))
         if not ok.any():
             break
         # the new edge must not exist yet (in the patch, either direction, or among the fixed faces)
