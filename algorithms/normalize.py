@@ -58,6 +58,8 @@ def _orientation_parity(f: NDArray[np.int64], alive: NDArray[np.bool_]) -> tuple
     same = (a[:, :, None, 0] == b[:, None, :, 0]) & (a[:, :, None, 1] == b[:, None, :, 1])
     same_dir = same.any(axis=(1, 2))
     n = len(sub)
+    if not same_dir.any():  # consistently wound already (the usual input): nothing to flip, no conflict
+        return np.zeros(len(f), dtype=bool), np.zeros(0, dtype=np.int64)
     nbrs: list[list[tuple[int, bool]]] = [[] for _ in range(n)]
     for (p, q), s in zip(pairs.tolist(), same_dir.tolist()):
         nbrs[p].append((q, s))

@@ -57,6 +57,7 @@ class RepairParams:
     clearance_factor: float = 1.5  # bridges keep this many chain spacings apart
     neighbourhood_factor: float = 1.0  # same-neighbourhood radius = factor x L_c
     crease_angle: float = 40.0  # sharp input edges (dihedral above, degrees) are continued across holes; 180: off
+    smooth: int = 3  # tangential relaxation steps of all new vertices after the final fairing (liepa-fair)
 
     def __post_init__(self) -> None:
         if self.tunnels not in TUNNELS:
@@ -69,6 +70,8 @@ class RepairParams:
             raise ValueError(f"parameter weight={self.weight!r}: must be 'area' or 'length'")
         if not (0 < self.crease_angle <= 180):
             raise ValueError(f"parameter crease_angle={self.crease_angle!r}: must be in (0, 180]")
+        if not (0 <= self.smooth <= 100):
+            raise ValueError(f"parameter smooth={self.smooth!r}: must be in 0..100")
         if not (0 <= self.max_split_depth <= 64):
             raise ValueError(f"parameter max_split_depth={self.max_split_depth!r}: must be in 0..64")
         for name in ("spacing_factor", "clearance_factor", "neighbourhood_factor"):
@@ -485,13 +488,14 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     on_crease = np.zeros(work.n, dtype=bool)
     for ids in pinned:
         on_crease[ids] = True
+    incidence = _Incidence(work.F(), work.n)
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
-        V, F = work.V(), work.F()
+        V = work.V()
         # darn on the neighbourhood of the hole only (three rings of faces, compact indices),
         # so the cost of a hole does not grow with the size of the intact surface (spec (17));
         # patches across a continued crease are left out: each side is faired as its own surface
-        sub_v, sub_f, glob = _neighbourhood(V, F, poly, rings=3)
+        sub_v, sub_f, glob = incidence.neighbourhood(V, poly, rings=3)
         apart = np.zeros(len(sub_f), dtype=bool)
         if on_crease.any():
             mask = np.zeros(len(V), dtype=bool)
@@ -503,6 +507,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         ids = work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
         to_global = np.concatenate([glob, ids])
         work.faces.append(to_global[np.asarray(patch.faces, dtype=np.int64)])
+        incidence.added.append(work.faces[-1])
         if on_crease[list(poly)].any():
             pinned.append(ids)  # faired by darn on its side of the crease; the global fairing keeps it
     V, F = work.V(), work.F()
@@ -517,7 +522,11 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         # edge flips over all new faces together (input faces fixed) let edges cross the chains
         # (not the crease chains)
         from .darning import relax
+        from .darning.fair import tangential_relax
 
+        # the fairing placed the vertices on a smooth surface but unevenly: even them out along it
+        V = tangential_relax(V, F[n_before:], np.setdiff1d(np.arange(n_input, len(V)), keep_still),
+                             iterations=params.smooth)
         fixed = F[:n_before]
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
         patch, _ = relax(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None)
@@ -538,23 +547,44 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                         timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "))
 
 
-def _neighbourhood(V: NDArray[np.float64], F: NDArray[np.int64], poly: tuple[int, ...], *,
-                   rings: int) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
-    """Faces within ``rings`` rings of the polygon's vertices, with compact vertex numbers.
+class _Incidence:
+    """Which faces touch which vertices, as the darning grows the surface: a sparse table of the
+    faces there were when it was made (the input's), and the few patch faces added since (searched
+    directly), so a hole's neighbourhood costs the size of the neighbourhood, not of the surface."""
 
-    Returns (vertices, faces, global index of each local vertex); the polygon's vertices are
-    always included, even where no face touches them yet (bridge chains).
-    """
-    near = np.zeros(len(V), dtype=bool)
-    near[list(poly)] = True
-    fmask = np.zeros(len(F), dtype=bool)
-    for _ in range(rings):  # each ring: the faces touching the vertices reached so far
-        fmask = near[F].any(axis=1)
-        near[F[fmask].ravel()] = True
-    glob = np.flatnonzero(near)
-    remap = np.full(len(V), -1, dtype=np.int64)
-    remap[glob] = np.arange(len(glob))
-    return V[glob], remap[F[fmask]], glob
+    def __init__(self, faces: NDArray[np.int64], n_vertices: int) -> None:
+        import scipy.sparse as sp
+
+        self.faces = np.asarray(faces, dtype=np.int64)
+        nf = len(self.faces)
+        self.table = sp.csr_matrix((np.ones(3 * nf, dtype=np.int8), (self.faces.ravel(), np.repeat(np.arange(nf), 3))),
+                                   shape=(n_vertices, nf))
+        self.added: list[NDArray[np.int64]] = []
+
+    def neighbourhood(self, V: NDArray[np.float64], poly: tuple[int, ...], *,
+                      rings: int) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+        """Faces within ``rings`` rings of the polygon's vertices, with compact vertex numbers.
+
+        Returns (vertices, faces in the surface's order, global index of each local vertex); the
+        polygon's vertices are always included, even where no face touches them yet (chains).
+        """
+        extra = np.vstack(self.added) if self.added else np.zeros((0, 3), dtype=np.int64)
+        near = np.zeros(len(V), dtype=bool)
+        near[list(poly)] = True
+        rows = self.table.shape[0]
+        f0 = np.zeros(0, dtype=np.int64)
+        fx = np.zeros(len(extra), dtype=bool)
+        for _ in range(rings):  # each ring: the faces touching the vertices reached so far
+            v = np.flatnonzero(near[:rows])
+            f0 = np.unique(self.table[v].indices)
+            fx = near[extra].any(axis=1)
+            near[self.faces[f0].ravel()] = True
+            near[extra[fx].ravel()] = True
+        F = np.vstack([self.faces[f0], extra[fx]])
+        glob = np.flatnonzero(near)
+        remap = np.full(len(V), -1, dtype=np.int64)
+        remap[glob] = np.arange(len(glob))
+        return V[glob], remap[F], glob
 
 
 def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: NDArray[np.float64],
