@@ -360,6 +360,20 @@ def markdown(rows: list[dict], cases: list[BenchCase], notes: list[str], samples
                         ("yes" if r["topology_right"] else "**no**") if ok else f"**{r['status']}**",
                         _pct(h) if ok else "–", _pct(hm), ratio,
                         ("yes" if r["kept"] >= 1 - 1e-12 else "**no**") if ok else "–"])
+    # patch quality after refinement (no angle below 15°, under 5 % of the patch triangles below 20°)
+    # and the speed of a Bunny-1-sized case (under 2 s light, 6 s full)
+    qual = []
+    for c in cases:
+        for mode in ("bridgefield repair light", "bridgefield repair full"):
+            r = next((r for r in rows if r["case"] == c.name and r["peer"] == mode and r.get("status") == "ok"), None)
+            if r is None or r.get("patch_min_angle") is None:
+                continue
+            ok = r["patch_min_angle"] >= 15 and r["patch_below_20"] < 0.05
+            limit = 2.0 if mode.endswith("light") else 6.0
+            speed = (("yes" if r["seconds"] < limit else "**no**") + f" ({r['seconds']:.2f} s < {limit:g} s)"
+                     if c.name == "bunny-many-holes" else "–")
+            qual.append([c.name, mode.replace("bridgefield repair ", ""), f"{r['patch_min_angle']:.1f}",
+                         _pct(r["patch_below_20"], 1), "yes" if ok else "**no**", speed])
     case_lines = "\n".join(f"- `{c.name}` ({len(c.faces)} faces, {len(c.free_points)} free points, genus "
                            f"{c.genus}{'' if c.truth is not None else ', no truth'}): {c.description}" for c in cases)
     parts = [
@@ -388,6 +402,11 @@ def markdown(rows: list[dict], cases: list[BenchCase], notes: list[str], samples
         "",
         table(["case", "mode", "topology right", "Hausdorff %", "MeshLib bridge Hausdorff %", "ratio",
                "every input face kept"], tgt) if tgt else "(algorithms.repair not available)",
+        "",
+        "### Targets (issue 4): patch quality after refinement, speed of a Bunny-1-sized case",
+        "",
+        table(["case", "mode", "patch min angle °", "patch < 20° %", "no angle < 15°, < 5 % below 20°",
+               "Bunny-1 size: under 2 s light / 6 s full"], qual) if qual else "(no patch)",
         "",
         "### Every case",
         "",
