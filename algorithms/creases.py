@@ -30,20 +30,41 @@ class CreaseEnds:
     others: dict[int, list[int]]
     normals: dict[int, list[NDArray[np.float64]]]  # (2, 3): the normals of the edge's two faces
 
-    def at(self, polygon: tuple[int, ...]) -> list[tuple[int, NDArray[np.float64], NDArray[np.float64]]]:
+    def at(self, polygon: tuple[int, ...], V: NDArray[np.float64] | None = None,
+           along: float = 12.0) -> list[tuple[int, NDArray[np.float64], NDArray[np.float64]]]:
         """(position, direction, face normals) of the crease ends on a hole polygon: sharp edges
         that reach the polygon from outside it (an edge between two polygon vertices runs along
-        the border)."""
+        the border). With ``V``: where the border itself goes on along the crease (the next border
+        vertex within ``along`` degrees of the crease direction), the end moves along it, so that
+        no chain starts beside a border edge that already continues the crease."""
         on = set(polygon)
-        return [(k, d, n) for k, v in enumerate(polygon)
-                for d, w, n in zip(self.directions.get(int(v), ()), self.others.get(int(v), ()),
-                                   self.normals.get(int(v), ())) if w not in on]
+        out = [(k, d, n) for k, v in enumerate(polygon)
+               for d, w, n in zip(self.directions.get(int(v), ()), self.others.get(int(v), ()),
+                                  self.normals.get(int(v), ())) if w not in on]
+        if V is None:
+            return out
+        m, lim = len(polygon), np.cos(np.radians(along))
+        moved = []
+        for k, d, n in out:
+            for _ in range(m):  # sequential: walk while the border follows the crease
+                step = [k2 for k2 in ((k + 1) % m, (k - 1) % m)
+                        if float(d @ _unit(V[polygon[k2]] - V[polygon[k]])) > lim]
+                if not step:
+                    break
+                k = step[0]
+            moved.append((k, d, n))
+        return moved
 
     def use(self, v: int) -> None:
         """A crease end that has been continued: no other chain starts there."""
         self.directions.pop(int(v), None)
         self.others.pop(int(v), None)
         self.normals.pop(int(v), None)
+
+
+def _unit(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    n = float(np.linalg.norm(a))
+    return a / n if n > 0 else a
 
 
 def _shared(n1: NDArray[np.float64], n2: NDArray[np.float64], cos_lim: float) -> int:
@@ -94,13 +115,16 @@ def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: 
 def hermite(p0: NDArray[np.float64], d0: NDArray[np.float64], p1: NDArray[np.float64], d1: NDArray[np.float64],
             spacing: float) -> NDArray[np.float64]:
     """Interior points of the cubic Hermite curve from p0 (tangent d0) to p1 (tangent d1), tangents
-    scaled by the chord length, about ``spacing`` apart; at least one (a chain without interior
-    points would be a chord that may already be an edge of the surface)."""
+    scaled by the chord length, evenly about ``spacing`` apart along the curve; at least one (a
+    chain without interior points would be a chord that may already be an edge of the surface)."""
+    from .bridge_graph import resample_chain
+
     L = float(np.linalg.norm(p1 - p0))
-    n = max(2, int(round(L / max(spacing, 1e-300))))
-    t = np.linspace(0.0, 1.0, n + 1)[1:-1, None]
+    t = np.linspace(0.0, 1.0, 65)[:, None]  # dense, then resampled by arc length
     h00, h10, h01, h11 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t, -2 * t**3 + 3 * t**2, t**3 - t**2
-    return h00 * p0 + h10 * L * d0 + h01 * p1 + h11 * L * d1
+    curve = h00 * p0 + h10 * L * d0 + h01 * p1 + h11 * L * d1
+    length = float(np.linalg.norm(np.diff(curve, axis=0), axis=1).sum())
+    return resample_chain(curve, min(spacing, length / 2))
 
 
 @dataclass(frozen=True)
@@ -128,7 +152,7 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
     (within ``max_normal_turn`` degrees: the same two surfaces meet there); the best pair (largest
     d_i . u - d_j . u) is returned.
     """
-    cand = ends.at(polygon)
+    cand = ends.at(polygon, V)
     if len(cand) < 2:
         return None
     lim = np.cos(np.radians(max_turn))
@@ -169,7 +193,7 @@ def crease_corner(V: NDArray[np.float64], polygon: tuple[int, ...], ends: Crease
     """
     from itertools import combinations
 
-    cand = ends.at(polygon)
+    cand = ends.at(polygon, V)
     if len(cand) < rays:
         return None
     pts = V[list(polygon)]

@@ -658,10 +658,10 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
             ends.use(v)
         return [b1], [a, c], [ids1]
     vk = poly[k]
-    c_id = int(ids1[int(np.argmin(np.linalg.norm(cs.points - C, axis=1)))])
+    c_id = int(ids1[int(np.argmin(np.linalg.norm(b1.points - C, axis=1)))])
     half, other = (a, c) if vk in a else (c, a)
     i, j = half.index(vk), half.index(c_id)
-    dk = next(d for p, d, _ in ends.at(poly) if p == k)
+    dk = next(d for p, d, _ in ends.at(poly, V) if p == k)
     b2, ids2 = chain(i, j, hermite(V[vk], dk, C, dk, spacing), cs.quality, half)
     h1, h2 = split_polygon(half, i, j, ids2)
     for v in (poly[cs.i], poly[cs.j], vk):
