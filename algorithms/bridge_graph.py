@@ -215,14 +215,26 @@ class TopologyGuard:
     - splits one hole in two (both ends on the same walk): the genus is unchanged;
     - joins two different holes of one component: that adds a handle (genus + 1).
     The third kind is a tunnel, which only the tunnel rule (§6 step 2) may decide.
+
+    A loop vertex v belongs to the walk that holds its boundary dart v -> next(v) (the walking rule
+    of :func:`walk_holes`). Adding a bridge A-B changes only the walks through A and B: they are
+    walked again from the darts at A and at B (two walks after a split, one after a merge), so a
+    kept bridge costs the length of the walks it touches, not a walk of every hole.
     """
 
     def __init__(self, loops: list[NDArray[np.int64]], loop_island: list[int]) -> None:
         self.loops = loops
         self.parent = {i: i for i in set(loop_island)}
         self.island_of = {int(v): isl for lp, isl in zip(loops, loop_island) for v in lp}
+        self._next: dict[int, int] = {}
         self.walk_of: dict[int, int] = {}
-        self.refresh([], [])
+        for k, lp in enumerate(loops):
+            lp = [int(x) for x in lp]
+            for a, b in zip(lp, lp[1:] + lp[:1]):
+                self._next[a] = b
+                self.walk_of[a] = k
+        self._other_end: dict[int, int] = {}
+        self._walks = len(loops)
 
     def find(self, i: int) -> int:
         while self.parent[i] != i:
@@ -230,16 +242,31 @@ class TopologyGuard:
             i = self.parent[i]
         return i
 
-    def refresh(self, bridges: list[Bridge], chains: list[NDArray[np.int64]]) -> None:
-        """Recompute which walk each loop vertex lies on (after bridges were added)."""
-        self.walk_of = {}
-        for k, h in enumerate(walk_holes(self.loops, bridges, chains)):
-            for v in h.polygon:
-                self.walk_of.setdefault(int(v), k)
-        for b in bridges:
-            ia, ib = self.island_of.get(b.start), self.island_of.get(b.end)
-            if ia is not None and ib is not None:
-                self.parent[self.find(ia)] = self.find(ib)
+    def _darts(self, v0: int) -> list[int]:
+        """The loop vertices whose darts the walk through dart v0 -> next(v0) takes, in order."""
+        out, v = [], v0
+        for _ in range(len(self._next) + 1):
+            out.append(v)
+            u = self._next[v]
+            v = self._other_end.get(u, u)  # at a bridge end: cross, continue on the arrival loop
+            if v == v0:
+                break
+        return out
+
+    def add(self, b: Bridge) -> None:
+        """Record a kept bridge: union its islands, walk again the (one or two) walks it touches."""
+        self._other_end[b.start] = b.end
+        self._other_end[b.end] = b.start
+        ia, ib = self.island_of.get(b.start), self.island_of.get(b.end)
+        if ia is not None and ib is not None:
+            self.parent[self.find(ia)] = self.find(ib)
+        for v0 in (b.start, b.end):
+            walk = self._darts(v0)
+            if v0 == b.end and b.start in walk:
+                break  # one walk through both ends: labelled already
+            self._walks += 1
+            for v in walk:
+                self.walk_of[v] = self._walks
 
     def effect(self, a: int, b: int) -> str:
         """"connect", "split" or "handle" for a bridge from loop vertex a to loop vertex b."""

@@ -58,6 +58,8 @@ def _orientation_parity(f: NDArray[np.int64], alive: NDArray[np.bool_]) -> tuple
     same = (a[:, :, None, 0] == b[:, None, :, 0]) & (a[:, :, None, 1] == b[:, None, :, 1])
     same_dir = same.any(axis=(1, 2))
     n = len(sub)
+    if not same_dir.any():  # consistently wound already (the usual input): nothing to flip, no conflict
+        return np.zeros(len(f), dtype=bool), np.zeros(0, dtype=np.int64)
     nbrs: list[list[tuple[int, bool]]] = [[] for _ in range(n)]
     for (p, q), s in zip(pairs.tolist(), same_dir.tolist()):
         nbrs[p].append((q, s))
@@ -268,18 +270,20 @@ def normalize(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
     if len(ids):
         n_isl, lab = islands(f_split[ids])
         size = np.bincount(lab, minlength=n_isl)
-        origin_isl: dict[int, set[int]] = {}
-        for vo, i in zip(vertex_origin[f_split[ids]].ravel().tolist(), np.repeat(lab, 3).tolist()):
-            origin_isl.setdefault(vo, set()).add(i)
-        for vo, isl in origin_isl.items():
-            if len(isl) > 1:
-                big = max(isl, key=lambda i: (size[i], -i))
-                for i in isl:
-                    if i != big and size[i] <= tiny_fragment and size[i] < size[big]:
-                        drop(ids[lab == i], f"fragment of {int(size[i])} faces attached to island "
-                                            f"{big} only at vertex {vo}")
-        links = _sheet_links(v, f, alive)
-        f_split, vertex_origin = _split_fans(f, alive, links, nv)
+        # (original vertex, island) pairs; only vertices shared by two or more islands matter
+        pairs = np.unique(np.stack([vertex_origin[f_split[ids]].ravel(), np.repeat(lab, 3)], axis=1), axis=0)
+        shared = np.flatnonzero(np.bincount(pairs[:, 0]) > 1)
+        n_alive = int(alive.sum())
+        for vo in shared.tolist():
+            isl = pairs[pairs[:, 0] == vo, 1].tolist()
+            big = max(isl, key=lambda i: (size[i], -i))
+            for i in isl:
+                if i != big and size[i] <= tiny_fragment and size[i] < size[big]:
+                    drop(ids[lab == i], f"fragment of {int(size[i])} faces attached to island "
+                                        f"{big} only at vertex {vo}")
+        if int(alive.sum()) != n_alive:  # fragments went: the sheets and fans change
+            links = _sheet_links(v, f, alive)
+            f_split, vertex_origin = _split_fans(f, alive, links, nv)
 
     # 5. orientation per island: flip the minority so neighbours agree; set aside what cannot be
     #    oriented (non-orientable strips)

@@ -33,6 +33,7 @@ from .bridge_graph import (
     split_polygon,
     walk_holes,
 )
+from .creases import CreaseEnds, crease_corner, crease_ends, crease_split, hermite
 from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
 from .metrics import angle_stats, min_angles, topology
@@ -55,6 +56,8 @@ class RepairParams:
     spacing_factor: float = 1.0  # bridge chain spacing = factor x mean boundary edge length
     clearance_factor: float = 1.5  # bridges keep this many chain spacings apart
     neighbourhood_factor: float = 1.0  # same-neighbourhood radius = factor x L_c
+    crease_angle: float = 40.0  # sharp input edges (dihedral above, degrees) are continued across holes; 180: off
+    smooth: int = 3  # tangential relaxation steps of all new vertices after the final fairing (liepa-fair)
 
     def __post_init__(self) -> None:
         if self.tunnels not in TUNNELS:
@@ -65,6 +68,10 @@ class RepairParams:
             raise ValueError(f"parameter fairing={self.fairing!r}: must be U1, U2 or U3")
         if self.weight not in ("area", "length"):
             raise ValueError(f"parameter weight={self.weight!r}: must be 'area' or 'length'")
+        if not (0 < self.crease_angle <= 180):
+            raise ValueError(f"parameter crease_angle={self.crease_angle!r}: must be in (0, 180]")
+        if not (0 <= self.smooth <= 100):
+            raise ValueError(f"parameter smooth={self.smooth!r}: must be in 0..100")
         if not (0 <= self.max_split_depth <= 64):
             raise ValueError(f"parameter max_split_depth={self.max_split_depth!r}: must be in 0..64")
         for name in ("spacing_factor", "clearance_factor", "neighbourhood_factor"):
@@ -138,7 +145,7 @@ class RepairResult:
                                     for s in self.model.set_aside]},
             "bridges": {
                 "count": len(self.bridges),
-                "by_kind": {k: sum(b.kind == k for b in self.bridges) for k in ("island", "tunnel", "split")},
+                "by_kind": {k: sum(b.kind == k for b in self.bridges) for k in ("island", "tunnel", "split", "crease")},
                 "qualities": [b.quality for b in self.bridges],
                 "kept": [{"kind": b.kind, "from_vertex": b.start, "to_vertex": b.end, "quality": b.quality,
                           "chain_vertices": int(len(b.points))} for b in self.bridges],
@@ -307,7 +314,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 why = "would join two holes of one surface (a handle the tunnel rule does not support)"
             if why is None:
                 keep(b, ln)
-                guard.refresh(bridges, chains)
+                guard.add(b)
             else:
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
@@ -316,14 +323,14 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             comps = list(guard.components().values())
             if len(comps) < 2:
                 break
-            sb = _join_components(work.V(), work.N(), frames, comps, lc_used, params.field.ki)
+            sb = _join_components(work.V(), frames, comps, lc_used, params.field.ki)
             if sb is None:
                 break
             ia, ib, q = sb
             b = Bridge(ia, ib, resample_chain(np.vstack([mesh.vertices[ia], mesh.vertices[ib]]), spacing), q,
                        "island")
             keep(b, None)
-            guard.refresh(bridges, chains)
+            guard.add(b)
             notes.append(f"islands {sorted(comps[0])} joined by a straight bridge: no force line joined them")
     timings["bridges"] = time.perf_counter() - t0
 
@@ -407,11 +414,26 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                                                      for h in holes]
     final: list[tuple[int, ...]] = []
     any_complex = False
+    ends = crease_ends(mesh.vertices, mesh.faces, params.crease_angle) if params.crease_angle < 180 else None
+    pinned: list[NDArray[np.int64]] = []  # crease chain vertices: the fairing keeps them where they are
+    locked: list[NDArray[np.int64]] = []  # crease chain edges: never flipped
     while queue:
         step(0.5, f"splitting complex holes ({len(queue)} to check)")
         poly, origin, depth = queue.pop(0)
         V, N = work.V(), work.N()
         verdict = classify_hole(V[list(poly)], N[list(poly)], test)
+        if ends is not None and len(set(poly)) == len(poly):
+            halves = _continue_creases(work, poly, ends, spacing)
+            if halves is not None:
+                new_bridges, parts, chain_ids = halves
+                for b in new_bridges:
+                    bridges.append(b)
+                records.append(HoleRecord(poly, verdict, origin, len(bridges) - 1, "a sharp crease continued"))
+                queue += [(pt, "crease", depth) for pt in parts]
+                pinned += chain_ids
+                locked += [np.stack([c[:-1], c[1:]], axis=1) for c in
+                           (np.r_[b.start, ids, b.end] for b, ids in zip(new_bridges, chain_ids))]
+                continue
         if len(set(poly)) != len(poly):
             verdict = HoleVerdict(False, verdict.reasons + ("not a disk (a vertex is walked twice)",),
                                   verdict.vertices, verdict.flatness, verdict.normal_agreement, verdict.radius)
@@ -463,25 +485,52 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     timings_note: dict[str, str] = {}
     n_before = len(work.F())
     n_input = model.mesh.n_vertices
+    on_crease = np.zeros(work.n, dtype=bool)
+    for ids in pinned:
+        on_crease[ids] = True
+    incidence = _Incidence(work.F(), work.n)
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
-        V, F = work.V(), work.F()
+        V = work.V()
         # darn on the neighbourhood of the hole only (three rings of faces, compact indices),
-        # so the cost of a hole does not grow with the size of the intact surface (spec (17))
-        sub_v, sub_f, glob = _neighbourhood(V, F, poly, rings=3)
+        # so the cost of a hole does not grow with the size of the intact surface (spec (17));
+        # patches across a continued crease are left out: each side is faired as its own surface
+        sub_v, sub_f, glob = incidence.neighbourhood(V, poly, rings=3)
+        apart = np.zeros(len(sub_f), dtype=bool)
+        if on_crease.any():
+            mask = np.zeros(len(V), dtype=bool)
+            mask[:len(on_crease)] = on_crease
+            apart = mask[glob[sub_f]].any(axis=1)
         local = {int(g): k for k, g in enumerate(glob)}
-        patch = darn(sub_v, sub_f, np.asarray([local[p] for p in poly], dtype=np.int64),
-                     method=params.darning, weight=params.weight)
+        patch = darn(sub_v, sub_f[~apart], np.asarray([local[p] for p in poly], dtype=np.int64),
+                     method=params.darning, weight=params.weight, apart=sub_f[apart])
         ids = work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
         to_global = np.concatenate([glob, ids])
         work.faces.append(to_global[np.asarray(patch.faces, dtype=np.int64)])
+        incidence.added.append(work.faces[-1])
+        if on_crease[list(poly)].any():
+            pinned.append(ids)  # faired by darn on its side of the crease; the global fairing keeps it
     V, F = work.V(), work.F()
     if params.darning == "liepa-fair" and len(V) > n_input:
         # fair every new vertex together (patch interiors and bridge chains), the input fixed:
         # the force lines chose the topology; the final shape is the smoothest continuation
 
-        V, fairing_used = _fair_new(V, F, n_input, params.fairing)
+        keep_still = np.concatenate(pinned) if pinned else np.zeros(0, dtype=np.int64)
+        V, fairing_used = _fair_new(V, F, n_input, params.fairing, keep_still)
         timings_note["fairing"] = fairing_used
+        # the patches were darned one by one and the bridge chains moved in the fairing: Delaunay
+        # edge flips over all new faces together (input faces fixed) let edges cross the chains
+        # (not the crease chains)
+        from .darning import relax
+        from .darning.fair import tangential_relax
+
+        # the fairing placed the vertices on a smooth surface but unevenly: even them out along it
+        V = tangential_relax(V, F[n_before:], np.setdiff1d(np.arange(n_input, len(V)), keep_still),
+                             iterations=params.smooth)
+        fixed = F[:n_before]
+        ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
+        patch, _ = relax(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None)
+        F = np.vstack([fixed, patch])
     timings["darn"] = time.perf_counter() - t0
     new_faces = np.arange(n_before, len(F))
     stages.append(Stage("darned", f"{len(final)} holes darned with {params.darning}: {len(F) - n_before} new faces",
@@ -498,29 +547,73 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                         timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "))
 
 
-def _neighbourhood(V: NDArray[np.float64], F: NDArray[np.int64], poly: tuple[int, ...], *,
-                   rings: int) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
-    """Faces within ``rings`` rings of the polygon's vertices, with compact vertex numbers.
+class _Incidence:
+    """Which faces touch which vertices, as the darning grows the surface: a sparse table of the
+    faces there were when it was made (the input's), and the few patch faces added since (searched
+    directly), so a hole's neighbourhood costs the size of the neighbourhood, not of the surface."""
 
-    Returns (vertices, faces, global index of each local vertex); the polygon's vertices are
-    always included, even where no face touches them yet (bridge chains).
+    def __init__(self, faces: NDArray[np.int64], n_vertices: int) -> None:
+        import scipy.sparse as sp
+
+        self.faces = np.asarray(faces, dtype=np.int64)
+        nf = len(self.faces)
+        self.table = sp.csr_matrix((np.ones(3 * nf, dtype=np.int8), (self.faces.ravel(), np.repeat(np.arange(nf), 3))),
+                                   shape=(n_vertices, nf))
+        self.added: list[NDArray[np.int64]] = []
+
+    def neighbourhood(self, V: NDArray[np.float64], poly: tuple[int, ...], *,
+                      rings: int) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+        """Faces within ``rings`` rings of the polygon's vertices, with compact vertex numbers.
+
+        Returns (vertices, faces in the surface's order, global index of each local vertex); the
+        polygon's vertices are always included, even where no face touches them yet (chains).
+        """
+        extra = np.vstack(self.added) if self.added else np.zeros((0, 3), dtype=np.int64)
+        near = np.zeros(len(V), dtype=bool)
+        near[list(poly)] = True
+        rows = self.table.shape[0]
+        f0 = np.zeros(0, dtype=np.int64)
+        fx = np.zeros(len(extra), dtype=bool)
+        for _ in range(rings):  # each ring: the faces touching the vertices reached so far
+            v = np.flatnonzero(near[:rows])
+            f0 = np.unique(self.table[v].indices)
+            fx = near[extra].any(axis=1)
+            near[self.faces[f0].ravel()] = True
+            near[extra[fx].ravel()] = True
+        F = np.vstack([self.faces[f0], extra[fx]])
+        glob = np.flatnonzero(near)
+        remap = np.full(len(V), -1, dtype=np.int64)
+        remap[glob] = np.arange(len(glob))
+        return V[glob], remap[F], glob
+
+
+def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: NDArray[np.float64],
+                          pb: NDArray[np.float64], tb: NDArray[np.float64], lc: float, ki: float,
+                          kernel: str = "gauss") -> tuple[int, int, float]:
+    """The best straight bridge from a point of set A to a point of set B: (index in A, index in B, Q).
+
+    The straight-bridge quality of spec §3 with n_X = the surface normal at A, from
+    algorithms.field.quality: s_A, s_B (1a, 1b), q_T = s_A . s_B (2) > 0 required,
+    Q = q_T q1(L) (1 + k_i q4) (3, 9) with q4 (7) at A. When no pair is compatible (q_T <= 0
+    everywhere), the shortest pair, with Q = 0.
     """
-    near = np.zeros(len(V), dtype=bool)
-    near[list(poly)] = True
-    fmask = np.zeros(len(F), dtype=bool)
-    for _ in range(rings):  # each ring: the faces touching the vertices reached so far
-        fmask = near[F].any(axis=1)
-        near[F[fmask].ravel()] = True
-    glob = np.flatnonzero(near)
-    remap = np.full(len(V), -1, dtype=np.int64)
-    remap[glob] = np.arange(len(glob))
-    return V[glob], remap[F[fmask]], glob
+    from .field.quality import q1, q4, q_topological, s_vectors
+
+    a, b = pa[:, None, :], pb[None, :, :]
+    sa, _ = s_vectors(a, ta[:, None, :], b, tb[None, :, :])  # (1a), (1b)
+    qt = q_topological(a, ta[:, None, :], b, tb[None, :, :])  # (2)
+    L = np.linalg.norm(b - a, axis=2)
+    Q = np.where(qt > 0, qt * q1(L, max(lc, 1e-12), kernel) * (1 + ki * q4(sa, na[:, None, :])), -np.inf)  # (9)
+    i, j = np.unravel_index(int(np.argmax(Q)), Q.shape)
+    if not np.isfinite(Q[i, j]):
+        i, j = np.unravel_index(int(np.argmin(L)), L.shape)
+        return int(i), int(j), 0.0
+    return int(i), int(j), float(Q[i, j])
 
 
-def _join_components(V: NDArray[np.float64], N: NDArray[np.float64], frames: list, comps: list[list[int]],
-                     lc: float, ki: float) -> tuple[int, int, float] | None:
-    """The best straight bridge from the first component's loops to any other component's loops
-    (straight-bridge quality of spec §3, as in _straight_bridge)."""
+def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]], lc: float,
+                     ki: float) -> tuple[int, int, float] | None:
+    """The best straight bridge from the first component's loops to any other component's loops."""
     first = set(comps[0])
     a_fr = [f for f in frames if f.island in first]
     b_fr = [f for f in frames if f.island not in first]
@@ -528,21 +621,52 @@ def _join_components(V: NDArray[np.float64], N: NDArray[np.float64], frames: lis
         return None
     A = np.concatenate([f.vertices for f in a_fr])
     B = np.concatenate([f.vertices for f in b_fr])
-    ta = np.concatenate([f.tangent for f in a_fr])
-    tb = np.concatenate([f.tangent for f in b_fr])
-    na = np.concatenate([f.normal for f in a_fr])
-    d = V[B][None, :, :] - V[A][:, None, :]
-    L = np.linalg.norm(d, axis=2)
-    u = d / np.maximum(L, 1e-300)[..., None]
-    sa = np.cross(u, ta[:, None, :])  # (1a)
-    sb = np.cross(-u, tb[None, :, :])  # (1b)
-    qT = np.einsum("ijk,ijk->ij", sa, sb)  # (2)
-    q4 = (1 + np.einsum("ijk,ijk->ij", sa, na[:, None, :])) / 2  # (7)
-    Q = np.where(qT > 0, qT * np.exp(-(L / max(lc, 1e-12)) ** 2) * (1 + ki * q4), -np.inf)  # (9)
-    i, j = np.unravel_index(int(np.argmax(Q)), Q.shape)
-    if not np.isfinite(Q[i, j]):
-        i, j = np.unravel_index(int(np.argmin(L)), L.shape)
-    return int(A[i]), int(B[j]), float(Q[i, j]) if np.isfinite(Q[i, j]) else 0.0
+    i, j, q = _best_straight_bridge(V[A], np.concatenate([f.tangent for f in a_fr]),
+                                    np.concatenate([f.normal for f in a_fr]), V[B],
+                                    np.concatenate([f.tangent for f in b_fr]), lc, ki)
+    return int(A[i]), int(B[j]), q
+
+
+def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spacing: float
+                      ) -> tuple[list[Bridge], list[tuple[int, ...]], list[NDArray[np.int64]]] | None:
+    """Split ``poly`` along the sharp creases it interrupts (algorithms.creases): a corner where
+    three creases meet (two chains through the corner point), else the best pair of crease ends.
+    Returns (bridges, the resulting hole polygons, each bridge's chain vertex ids), or None.
+    Each crease end is used once (it is removed from ``ends``)."""
+    V = work.V()
+
+    def chain(i: int, j: int, pts: NDArray[np.float64], q: float, p: tuple[int, ...]):
+        N = work.N()
+        nrm = (N[p[i]] + N[p[j]]) / 2
+        ids = work.add_vertices(pts, np.repeat(nrm[None], len(pts), axis=0))
+        return Bridge(int(p[i]), int(p[j]), pts, q, "crease"), ids
+
+    straight = crease_split(V, poly, ends, spacing)
+    if straight is not None:
+        b, ids = chain(straight.i, straight.j, straight.points, straight.quality, poly)
+        for v in (poly[straight.i], poly[straight.j]):
+            ends.use(v)
+        return [b], list(split_polygon(poly, straight.i, straight.j, ids)), [ids]
+    corner = crease_corner(V, poly, ends, spacing) or crease_corner(V, poly, ends, spacing, rays=2)
+    if corner is None:
+        return None
+    cs, k, C = corner
+    b1, ids1 = chain(cs.i, cs.j, cs.points, cs.quality, poly)
+    a, c = split_polygon(poly, cs.i, cs.j, ids1)
+    if k < 0:  # two rays: the crease turns at C
+        for v in (poly[cs.i], poly[cs.j]):
+            ends.use(v)
+        return [b1], [a, c], [ids1]
+    vk = poly[k]
+    c_id = int(ids1[int(np.argmin(np.linalg.norm(b1.points - C, axis=1)))])
+    half, other = (a, c) if vk in a else (c, a)
+    i, j = half.index(vk), half.index(c_id)
+    dk = next(d for p, d, _ in ends.at(poly, V) if p == k)
+    b2, ids2 = chain(i, j, hermite(V[vk], dk, C, dk, spacing), cs.quality, half)
+    h1, h2 = split_polygon(half, i, j, ids2)
+    for v in (poly[cs.i], poly[cs.j], vk):
+        ends.use(v)
+    return [b1, b2], [other, h1, h2], [ids1, ids2]
 
 
 def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:
@@ -568,41 +692,33 @@ def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:
 def _straight_bridge(V: NDArray[np.float64], N: NDArray[np.float64], polygon: tuple[int, ...],
                      lc: float, ki: float) -> tuple[int, int, float] | None:
     """The best straight bridge between the two sides of a non-disk walk (positions i, j and its
-    quality), scored by the straight-bridge quality of spec §3 with n_X = the surface normal:
-    q_T (2) > 0 required, Q ~ q_T q1(L) (1 + k_i q4) (9)."""
+    quality, :func:`_best_straight_bridge`)."""
     sides = _sides(polygon)
     if sides is None:
         return None
     s1, s2 = (np.asarray(x) for x in sides)
     fr = polygon_frame(V, N, polygon)
-    a, b = fr.points[s1][:, None, :], fr.points[s2][None, :, :]
-    d = b - a
-    L = np.linalg.norm(d, axis=2)
-    u = d / np.maximum(L, 1e-300)[..., None]
-    sa = np.cross(u, fr.tangent[s1][:, None, :])  # (1a)
-    sb = np.cross(-u, fr.tangent[s2][None, :, :])  # (1b)
-    qT = np.einsum("ijk,ijk->ij", sa, sb)  # (2)
-    q4 = (1 + np.einsum("ijk,ijk->ij", sa, fr.normal[s1][:, None, :])) / 2  # (7) at the start
-    Q = np.where(qT > 0, qT * np.exp(-(L / max(lc, 1e-12)) ** 2) * (1 + ki * q4), -np.inf)  # (3), (9)
-    i, j = np.unravel_index(int(np.argmax(Q)), Q.shape)
-    if not np.isfinite(Q[i, j]):
-        i, j = np.unravel_index(int(np.argmin(L)), L.shape)  # no compatible pair: the shortest
-    return int(s1[i]), int(s2[j]), float(Q[i, j]) if np.isfinite(Q[i, j]) else 0.0
+    i, j, q = _best_straight_bridge(fr.points[s1], fr.tangent[s1], fr.normal[s1], fr.points[s2], fr.tangent[s2],
+                                    lc, ki)
+    return int(s1[i]), int(s2[j]), q
 
 
-def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operator: str) -> tuple[NDArray, str]:
-    """Fair the new vertices with the input fixed; fall back to lower orders / uniform weights
-    when the system is singular (a free region without enough fixed rings around it)."""
+def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operator: str,
+              keep_still: NDArray[np.int64] | None = None) -> tuple[NDArray, str]:
+    """Fair the new vertices (except ``keep_still``) with the input fixed; fall back to lower
+    orders / uniform weights when the system is singular (a free region without enough fixed rings
+    around it)."""
+    from .darning import plausible
     from .darning.fair import fair
 
-    free = np.arange(n_input, len(V))
+    free = np.setdiff1d(np.arange(n_input, len(V)), keep_still if keep_still is not None else [])
     tries = [(operator, "cotan"), ("U2", "cotan"), ("U2", "uniform"), ("U1", "uniform")]
     for op, w in tries[tries.index((operator, "cotan")) if (operator, "cotan") in tries else 0:]:
         try:
             out = fair(V, F, free, operator=op, weights=w)
         except (RuntimeError, ValueError, np.linalg.LinAlgError):
             continue
-        if np.all(np.isfinite(out)):
+        if plausible(out[free], V[free]):  # finite and near the unfaired patches
             return out, f"{op} {w}"
     return V, "none (every fairing system was singular)"
 

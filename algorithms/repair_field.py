@@ -100,7 +100,10 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
             if cancel is not None and cancel():
                 raise Cancelled()
             dp = np.abs(src.pos - i)
-            inside = mine & (np.minimum(dp, src.loop_len - dp) <= win)
+            # a point where another loop touches the start (a pinch vertex, or a coincident vertex
+            # of another loop) is no target: a line from a point to that same point has no direction
+            same = np.linalg.norm(src.points - fr.points[i], axis=1) <= 1e-9 * lc
+            inside = (mine & (np.minimum(dp, src.loop_len - dp) <= win)) | same
             sub = src.subset(~inside)
             field = Biaf(IndicatorField(sub, p, lc, bvh=bvh, free=fp))
             tg = make_targets(sub.points, edge[~inside], float(p.step), vertex=sub.vertex, island=sub.island)
@@ -158,7 +161,12 @@ def split_line(model: Icadm, frame: LoopFrame, params: FieldParams, *, cancel: C
     for i in order[:tries]:
         if cancel is not None and cancel():
             raise Cancelled()
-        ln = trace_in_loop(ctx, frame, int(i), p, exclude_fraction=exclude_fraction, lc=lc)
+        try:
+            ln = trace_in_loop(ctx, frame, int(i), p, exclude_fraction=exclude_fraction, lc=lc)
+        except ZeroDivisionError:
+            # the fused tracer divides by a zero direction when a target coincides with the line's
+            # point (a hole walk that touches itself at one position): no usable line from here
+            continue
         if not ln.arrived or int(ln.end_vertex) not in pos:
             continue
         j = pos[int(ln.end_vertex)]

@@ -125,6 +125,14 @@ def shared_cases() -> list[BenchCase]:
     out.append(_from_case(gen.cut(bun, bh, name="bunny-holes",
                                   description="the closed bunny with three holes on its body (radius 6-7 % of "
                                               "the diagonal)"), 0, 1, 3))
+    rng = np.random.default_rng(7)
+    many = np.zeros(bun.n_faces, dtype=bool)
+    for vi in rng.choice(bun.n_vertices, 60, replace=False):
+        many |= ball(bun, bun.vertices[vi], 0.03 * bd)
+    out.append(_from_case(gen.cut(bun, many, name="bunny-many-holes",
+                                  description="the closed bunny with 60 overlapping small holes (about 2,000 boundary "
+                                              "points, the size of the paper's Bunny-1; three tiny fragments)"),
+                          0, 4, 44))
     return out
 
 

@@ -1,7 +1,15 @@
 import numpy as np
 import pytest
 
-from algorithms.bridge_graph import Bridge, ConflictRules, GraphState, resample_chain, split_polygon, walk_holes
+from algorithms.bridge_graph import (
+    Bridge,
+    ConflictRules,
+    GraphState,
+    TopologyGuard,
+    resample_chain,
+    split_polygon,
+    walk_holes,
+)
 from algorithms.cases import combine, disk
 from algorithms.holes import SimpleHoleTest, classify_hole, polygon_self_intersects
 from algorithms.topology import boundary_loops
@@ -91,3 +99,51 @@ def test_self_intersection():
     eight = np.array([[0, 0], [1, 1], [1, 0], [0, 1]], float)
     assert polygon_self_intersects(eight)
     assert not polygon_self_intersects(np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float))
+
+
+def _walk_partition(loops, bridges):
+    """Brute force: the loop vertices of each walk of walk_holes, bridge ends left out (a bridge end
+    lies on two walks: the one arriving along its loop and the one leaving by its dart)."""
+    chains = [np.zeros(0, dtype=int) for _ in bridges]
+    ends = {v for b in bridges for v in (b.start, b.end)}
+    return [frozenset(h.polygon) - ends for h in walk_holes(loops, bridges, chains)]
+
+
+def test_topology_guard_incremental_walks_match_a_full_walk():
+    # three disks (three islands, one loop each) and random non-touching bridges between their loops
+    m = combine(disk(segments=12, rings=1), disk(center=(4, 0, 0), segments=12, rings=1),
+                disk(center=(0, 4, 0), segments=12, rings=1))
+    loops = sorted(boundary_loops(m.faces), key=lambda lp: lp.min())
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        guard = TopologyGuard(loops, [0, 1, 2])
+        free = {int(v) for lp in loops for v in lp}
+        bridges = []
+        effects = []
+        for _ in range(5):
+            a, b = rng.choice(sorted(free), 2, replace=False)
+            a, b = int(a), int(b)
+            effects.append(guard.effect(a, b))
+            br = Bridge(a, b, np.zeros((0, 3)), 1.0)
+            bridges.append(br)
+            guard.add(br)
+            free -= {a, b}
+            # every walk of the full walk: its dart vertices carry one label, distinct walks differ
+            labels = [{guard.walk_of[v] for v in g} for g in _walk_partition(loops, bridges)]
+            labels = [lab for lab in labels if lab]
+            assert all(len(lab) == 1 for lab in labels)
+            assert len({next(iter(lab)) for lab in labels}) == len(labels)
+        # the effect of each bridge matches what it did to the count of walks and components
+        n_walks = len(loops)
+        comps = 3
+        for i, e in enumerate(effects):
+            holes = walk_holes(loops, bridges[:i + 1], [np.zeros(0, dtype=int)] * (i + 1))
+            if e == "connect":
+                comps -= 1
+                assert len(holes) == n_walks - 1
+            elif e == "split":
+                assert len(holes) == n_walks + 1
+            else:
+                assert e == "handle" and len(holes) == n_walks - 1
+            n_walks = len(holes)
+        assert comps == len(guard.components())

@@ -125,3 +125,43 @@ def test_real_bunny_main_island_closed(tmp_path):
     rep = res.report()
     assert rep["set_aside"]["count"] == len(model.set_aside) > 80
     assert_input_kept(model, res.mesh)
+
+
+def test_torus_stl_cut_across_its_tube_comes_back_genus_1():
+    from algorithms.cases import torus_slab
+
+    v, f = load_raw(data_file("torus.stl"))
+    truth = Mesh(v, f)
+    c = cut(truth, torus_slab(truth, 25.0), name="torus-cut", description="")
+    model = normalize(c.incomplete.vertices, c.incomplete.faces)
+    assert islands(model.mesh.faces)[0] == 1
+    res = repair(model)
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 1 and t.genus == 1
+    assert res.class_found == "ICMT"
+    assert_input_kept(model, res.mesh)
+
+
+@pytest.mark.parametrize("where, center, radius", [("edge", (1, 1, 0.2), 0.45), ("corner", (1, 1, 1), 0.6)])
+def test_sharp_edge_and_corner_continued_across_a_hole(where, center, radius):
+    import trimesh
+
+    b = trimesh.creation.box(extents=(2, 2, 2))
+    v, f = trimesh.remesh.subdivide_to_size(b.vertices, b.faces, max_edge=0.15)
+    truth = Mesh(v, f)
+    rm = np.linalg.norm(v[f].mean(axis=1) - np.array(center), axis=1) < radius
+    inc = cut(truth, rm, name=where, description="").incomplete
+    model = normalize(inc.vertices, inc.faces)
+    sharp = repair(model)
+    smooth = repair(model, RepairParams(crease_angle=180.0))
+    for res in (sharp, smooth):
+        t = topology(res.mesh.faces)
+        assert t.watertight and t.genus == 0
+        assert_input_kept(model, res.mesh)
+    assert sum(b.kind == "crease" for b in sharp.bridges) == (1 if where == "edge" else 2)
+    assert not any(b.kind == "crease" for b in smooth.bridges)
+    d_sharp = distances(sharp.mesh.vertices, sharp.mesh.faces, v, f, samples=3000).hausdorff
+    d_smooth = distances(smooth.mesh.vertices, smooth.mesh.faces, v, f, samples=3000).hausdorff
+    # the box's faces are planes: continuing the edge (and the corner) rebuilds them exactly
+    assert d_sharp < 1e-4 and d_smooth > 0.02
+    assert sharp.report()["patch_angles"]["min"] > 20

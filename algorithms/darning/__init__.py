@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..mesh import Mesh
+from ..mesh import Mesh, _frozen
 from ..topology import boundary_halfedges, boundary_loops, halfedges
 from .fair import ORDERS, WEIGHTINGS, fair, tangential_relax
 from .fan import fan
@@ -44,12 +44,6 @@ FAIRINGS = ("U2", "U1", "U3")
 
 __all__ = ["METHODS", "DEFAULT_METHOD", "WEIGHTS", "FAIRINGS", "Patch", "darn", "fill_holes", "apply_patch",
            "triangulate", "fan", "refine", "relax", "fair"]
-
-
-def _ro(a: NDArray, dtype: type) -> NDArray:
-    out = np.array(a, dtype=dtype, copy=True)
-    out.setflags(write=False)
-    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,9 +66,9 @@ class Patch:
     flips: int = 0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "new_vertices", _ro(np.reshape(self.new_vertices, (-1, 3)), np.float64))
-        object.__setattr__(self, "faces", _ro(np.reshape(self.faces, (-1, 3)), np.int64))
-        object.__setattr__(self, "loop", _ro(self.loop, np.int64))
+        object.__setattr__(self, "new_vertices", _frozen(np.reshape(self.new_vertices, (-1, 3)), np.float64))
+        object.__setattr__(self, "faces", _frozen(np.reshape(self.faces, (-1, 3)), np.int64))
+        object.__setattr__(self, "loop", _frozen(self.loop, np.int64))
 
 
 def apply_patch(vertices: NDArray[np.float64], faces: NDArray[np.int64],
@@ -99,7 +93,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
          method: str = DEFAULT_METHOD, weight: str = "area", density: float = float(np.sqrt(2.0)),
          fairing: str = "U3", fair_weights: str = "cotan", fair_rounds: int = 2, smooth: int = 5,
          fair_iterations: int = 1,
-         forbid_existing: bool = True) -> Patch:
+         forbid_existing: bool = True, apart: NDArray[np.int64] | None = None) -> Patch:
     """Fill the hole bounded by ``loop`` (vertex indices in the loop's positive direction).
 
     vertices (V, 3), faces (F, 3): the surface around the hole (never modified).
@@ -120,6 +114,9 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         out the vertices along the surface; cotangent fairing alone leaves slivers), then edge flips.
     forbid_existing: chords that already are edges of the surface are not used (they would be
         non-manifold); if every triangulation needs one, the unconstrained optimum is taken.
+    apart: (K, 3) faces of the surface across a sharp crease from this hole (algorithms.creases):
+        they count as existing edges (no chord, split or flip may duplicate one) but neither the
+        edge-length scale nor the fairing reads them, so the patch does not round the crease off.
     """
     _check(method, weight, fairing, fair_weights)
     v = np.asarray(vertices, dtype=np.float64)
@@ -132,6 +129,11 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         raise ValueError("loop vertex index out of range")
     nv = len(v)
     ring = f[np.isin(f, lp).any(axis=1)]  # the fixed faces touching the hole border
+    if apart is not None and len(apart):
+        ap = np.asarray(apart, dtype=np.int64).reshape(-1, 3)
+        every = np.vstack([ring, ap[np.isin(ap, lp).any(axis=1)]])  # for the existing-edge checks
+    else:
+        every = ring
     if method == "fan":
         c, lf = fan(v[lp])
         glob = np.r_[lp, nv]
@@ -140,8 +142,8 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     forbidden = None
     pos = np.full(nv, -1, dtype=np.int64)
     pos[lp] = np.arange(n)
-    if forbid_existing and len(ring):
-        he = halfedges(ring)
+    if forbid_existing and len(every):
+        he = halfedges(every)
         both = (pos[he[:, 0]] >= 0) & (pos[he[:, 1]] >= 0)
         if both.any():
             forbidden = np.zeros((n, n), dtype=bool)
@@ -165,7 +167,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     ln = np.linalg.norm(v[np.roll(lp, -1)] - v[lp], axis=1)  # loop edge j = (lp[j], lp[j+1])
     loop_mean = (ln + np.roll(ln, 1)) / 2
     scale[lp] = np.where(np.isfinite(scale[lp]), scale[lp], loop_mean)
-    r = refine(v, ring, patch_faces, density=density, scale=scale)
+    r = refine(v, every, patch_faces, density=density, scale=scale)
     P, pf, splits, flips = r.vertices, r.faces, r.splits, r.flips
     # the fixed faces the fairing reads: L^k at a patch vertex reads L up to k-1 rings out, so U2
     # needs the faces around the loop, U3 also those around their vertices
@@ -179,19 +181,35 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         for k in range(fair_rounds):  # sequential: each round refines the previous round's surface
             if k:
                 s2 = np.concatenate([scale, np.full(len(P) - nv, np.nan)])  # new vertices: the loop's mean
-                r = refine(P, ring, pf, density=density, scale=s2)
+                r = refine(P, every, pf, density=density, scale=s2)
                 P, pf = r.vertices, r.faces
                 splits += r.splits
                 flips += r.flips
             free = np.arange(nv, len(P))
-            P = fair(P, np.vstack([around, pf]), free, operator=fairing, weights=fair_weights, bare=bare,
-                     iterations=fair_iterations)
+            faired = fair(P, np.vstack([around, pf]), free, operator=fairing, weights=fair_weights, bare=bare,
+                          iterations=fair_iterations)
+            if not plausible(faired[free], v[lp]):
+                break  # a folded patch makes the system near-singular: keep the refined patch
+            P = faired
             if smooth:
                 P = tangential_relax(P, np.vstack([around, pf]), free, iterations=smooth)
             if k or smooth:
-                pf, nflip = relax(P, pf, ring)
+                pf, nflip = relax(P, pf, every)
                 flips += nflip
     return Patch(P[nv:], pf, lp, method, weight, splits, flips)
+
+
+def plausible(points: NDArray[np.float64], border: NDArray[np.float64], *, reach: float = 1.0) -> bool:
+    """Whether faired patch vertices stay near their hole: finite, and within ``reach`` times the
+    border's diameter of the border's bounding box (a smooth cap over a hole bulges by a fraction of
+    its width; a near-singular system throws vertices far away)."""
+    if not len(points):
+        return True
+    if not np.all(np.isfinite(points)):
+        return False
+    lo, hi = border.min(axis=0), border.max(axis=0)
+    pad = reach * float(np.linalg.norm(hi - lo))
+    return bool(np.all(points >= lo - pad) and np.all(points <= hi + pad))
 
 
 def _outside_normals(v: NDArray[np.float64], ring: NDArray[np.int64], lp: NDArray[np.int64]) -> NDArray[np.float64]:

@@ -60,14 +60,15 @@ def _angle_at(p: NDArray[np.float64], apex: NDArray[np.int64], a: NDArray[np.int
 
 
 def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: NDArray[np.int64], *,
-          max_passes: int = 200) -> tuple[NDArray[np.int64], int]:
+          max_passes: int = 200, locked: NDArray[np.int64] | None = None) -> tuple[NDArray[np.int64], int]:
     """Delaunay edge flips on the patch-interior edges until none flips.
 
     One pass flips an independent set of violating edges at once (each face takes part in at
     most one flip: every face picks its most violating edge, an edge flips when both its faces
     picked it, so the worst edge always flips). A flip is refused when the new edge already
     exists (it would be non-manifold) or when a new face would fold over (its normal opposes the
-    quad's). Returns (faces, number of flips).
+    quad's). ``locked`` (K, 2): edges that never flip (e.g. a continued crease). Returns (faces,
+    number of flips).
     """
     p = np.asarray(vertices, dtype=np.float64)
     f = np.array(patch, dtype=np.int64, copy=True)
@@ -75,6 +76,8 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
     nv = len(p)
     fixed_keys = (np.unique(np.sort(halfedges(fixed), axis=1) @ np.array([nv, 1])) if len(fixed)
                   else np.zeros(0, np.int64))
+    locked_keys = (np.unique(np.sort(np.asarray(locked, dtype=np.int64), axis=1) @ np.array([nv, 1]))
+                   if locked is not None and len(locked) else np.zeros(0, np.int64))
     total = 0
     active = np.ones(len(f), dtype=bool)  # faces a flip may involve (after a pass: the flipped ones)
 
@@ -106,7 +109,7 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
         alpha = _angle_at(p, c, a, b)
         beta = _angle_at(p, d, a, b)
         score = alpha + beta - np.pi
-        ok = (score > 1e-9) & (c != d)
+        ok = (score > 1e-9) & (c != d) & ~_has(locked_keys, np.minimum(a, b) * nv + np.maximum(a, b))
         if not ok.any():
             break
         # the new edge must not exist yet (in the patch, either direction, or among the fixed faces)
@@ -146,7 +149,7 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
 def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch: NDArray[np.int64], *,
            density: float = np.sqrt(2.0), scale: NDArray[np.float64] | None = None, max_rounds: int = 60,
            flip: bool = True, label: NDArray[np.int64] | None = None,
-           obtuse: float | None = 150.0) -> Refined:
+           obtuse: float | None = 150.0, budget: float = 6.0) -> Refined:
     """Refine the patch faces ``patch`` (indices into ``vertices``) next to ``fixed_faces``.
 
     density: alpha of the split test (1 = the spec's test literally; sqrt 2 = Liepa's).
@@ -156,6 +159,10 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
         angle above this many degrees is split at its midpoint, and the rounds go on (a
         near-flat sliver, e.g. Liepa's zero-area ear over three almost collinear border vertices,
         passes the centroid test and no flip can remove it); None: the spec's rounds only.
+    budget: **(choice)** splitting stops once the patch has more than ``budget`` times the faces
+        an even triangulation at the scale l would need (patch area / (sqrt(3)/4 l^2), plus the
+        initial faces): a folded or self-overlapping patch, whose flips are refused, could
+        otherwise split without end.
     """
     if not density > 0:
         raise ValueError(f"density must be > 0, got {density}")
@@ -171,6 +178,9 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
     pts = [v]
     nv = len(v)
     splits = flips = 0
+    tri = v[f]
+    area = 0.5 * float(np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
+    max_faces = budget * (len(f) + area / (np.sqrt(3) / 4 * fill * fill)) if fill > 0 else np.inf
     rounds = 0
     while rounds < max_rounds:  # sequential: split, relax, repeat (frep.md §4)
         rounds += 1
@@ -180,6 +190,8 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
         lc = lv[f].mean(axis=1)  # l(v_c)
         dist = density * np.linalg.norm(vc[:, None, :] - t, axis=2)
         split = np.all(dist > lc[:, None], axis=1) & np.all(dist > lv[f], axis=1)
+        if len(f) + 2 * int(split.sum()) > max_faces:
+            split[:] = False
         ns = int(split.sum())
         if ns:
             new = nv + np.arange(ns)
@@ -198,7 +210,7 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
             f, nflip = relax(P, f, fixed_faces)
             flips += nflip
         if not ns and not nflip:
-            if obtuse is None:
+            if obtuse is None or len(f) > max_faces:
                 break
             P = np.vstack(pts) if len(pts) > 1 else pts[0]
             f, lab, mids, lm = _split_obtuse(P, f, lab, lv, nv, np.radians(obtuse))
@@ -229,7 +241,10 @@ def _split_obtuse(p: NDArray[np.float64], f: NDArray[np.int64], lab: NDArray[np.
     c = f[h1 // 3, (h1 % 3 + 2) % 3]
     d = f[h2 // 3, (h2 % 3 + 2) % 3]
     worst = np.maximum(_angle_at(p, c, a, b), _angle_at(p, d, a, b))
-    cand = np.flatnonzero(worst > limit)
+    # only edges longer than half their ends' scale: halving them cannot go on for ever (a folded
+    # patch, whose flips are refused, would otherwise split its obtuse edges without end)
+    long_ = np.linalg.norm(p[a] - p[b], axis=1) > 0.5 * (lv[a] + lv[b]) / 2
+    cand = np.flatnonzero((worst > limit) & long_)
     empty = np.zeros((0, 3))
     if not len(cand):
         return f, lab, empty, np.zeros(0)
