@@ -117,7 +117,11 @@ def tracer_chunk(state, start, n_rec, max_steps, chunk, step, floor, full, la, f
         if k >= chunk:
             state[0], state[1], state[2] = x, f, n
             return k, CONTINUE, -1
-        p = f / np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
+        fn = np.sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
+        if not fn > 0.0:  # no force (a target on the point itself): no direction to step in
+            state[0], state[1], state[2] = x, f, n
+            return k, TOO_WEAK_C, -1
+        p = f / fn
         if pc:  # 2010 F4.1
             x_new = _corrected(x, p, n, step, dev, offs, full, la, fa)
         else:
