@@ -70,6 +70,13 @@ def test_hybrid_threshold_moves_the_histogram(qtbot):
     assert "Stage II" in w.uv_canvas.ax.get_title()
     img = w.plotter.screenshot(return_img=True)
     assert _not_blank(img) > 0.05
+
+    # a tighter chordal tolerance (the curvature criterion) refines further
+    coarse = w.current
+    w.deviation_spin.setValue(0.0005)
+    qtbot.waitUntil(lambda: w.current is not coarse and not w.busy, timeout=60_000)
+    assert w.current.params.max_deviation == 0.0005
+    assert len(w.current.result.faces) > len(coarse.result.faces)
     _close(qtbot, w)
 
 

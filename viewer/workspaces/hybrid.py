@@ -223,6 +223,15 @@ class HybridWorkspace(QWidget):
         self.chord_spin.setToolTip("Curvature criterion: refine while chord / arc is below this (0: off)")
         self.chord_spin.valueChanged.connect(self._params_changed)
         form.addRow("Chord / arc", self.chord_spin)
+        self.deviation_spin = QDoubleSpinBox()
+        self.deviation_spin.setRange(0.0, 1e3)
+        self.deviation_spin.setDecimals(5)
+        self.deviation_spin.setSingleStep(0.0005)
+        self.deviation_spin.setSpecialValueText("spec's")
+        self.deviation_spin.setToolTip("Curvature criterion as a chordal error: refine a triangle or border segment "
+                                       "farther than this from the surface (model units; 0: the spec's setting)")
+        self.deviation_spin.valueChanged.connect(self._params_changed)
+        form.addRow("Max deviation", self.deviation_spin)
 
         self.stage_combo = QComboBox()
         self.stage_combo.addItem("after refinement (Stage III)", "after")
@@ -282,6 +291,7 @@ class HybridWorkspace(QWidget):
         p = spec.params()
         for wdg, val in ((self.threshold_spin, p.min_angle), (self.max_edge_spin, p.max_edge or 0.0),
                          (self.cells_spin, p.cells), (self.chord_spin, p.chord_arc),
+                         (self.deviation_spin, p.max_deviation or 0.0),
                          (self.threshold_slider, int(round(p.min_angle)))):
             wdg.blockSignals(True)
             wdg.setValue(val)
@@ -301,7 +311,8 @@ class HybridWorkspace(QWidget):
         assert self.spec is not None
         me = self.max_edge_spin.value()
         return self.spec.params(min_angle=self.threshold_spin.value(), max_edge=me if me > 0 else None,
-                                cells=self.cells_spin.value(), chord_arc=self.chord_spin.value())
+                                cells=self.cells_spin.value(), chord_arc=self.chord_spin.value(),
+                                max_deviation=self.deviation_spin.value() or None)
 
     def _threshold_changed(self, value: float) -> None:
         self.threshold_slider.blockSignals(True)
