@@ -11,8 +11,9 @@ hole, so the hole polygon passes the attachment vertex twice,
 (``m`` the hole's vertex, ``f1..fk`` the fragment's boundary loop in its positive direction), the
 polygon with the hole on its right everywhere (spec §6: the surface on the left of every walk).
 The polygon is then not a disk and the pipeline joins its two sides by a bridge like any walk that
-passes a vertex twice, and darns the halves; the fragment's faces become faces of the output with
-their vertices unchanged. The fragment's winding follows the surface: it is reversed (recorded)
+passes a vertex twice (``fragment_bridge``: from a fragment vertex across the gap to the border,
+aimed along the border frames' outward vectors), and darns the halves; the fragment's faces become
+faces of the output with their vertices unchanged. The fragment's winding follows the surface: it is reversed (recorded)
 when its normal disagrees with the surface normal at ``m``.
 """
 
@@ -38,6 +39,7 @@ class Attached:
     normals: dict[int, NDArray[np.float64]] = field(default_factory=dict)  # loop vertex -> fragment normal
     notes: tuple[str, ...] = ()
     source: tuple[int, ...] | None = None  # index of the input polygon each polygon comes from (None: same order)
+    attach: tuple[int, ...] = ()  # the hole vertex each attached fragment hangs at
 
 
 def _fragments(model: Icadm) -> list[tuple[list[int], NDArray[np.int64]]]:
@@ -62,6 +64,7 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
     polys = [tuple(int(x) for x in p) for p in polygons]
     out_f: list[NDArray[np.int64]] = []
     in_ids: list[int] = []
+    at: list[int] = []
     flips: list[bool] = []
     nrm_of: dict[int, NDArray[np.float64]] = {}
     notes: list[str] = []
@@ -106,6 +109,7 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
         p = polys[k]
         polys[k] = p[:i + 1] + tuple(walk) + (m,) + p[i + 1:]
         out_f.append(np.where(faces == a, m, faces))
+        at.append(m)
         in_ids += fids
         flips += [flip] * len(fids)
         unit = fn / max(float(np.linalg.norm(fn)), 1e-300)
@@ -128,7 +132,7 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
                 i, j = cut
                 stack += [q[i:j], q[j:] + q[:i]]
     faces_out = np.vstack(out_f) if out_f else np.zeros((0, 3), dtype=np.int64)
-    return Attached(pieces, faces_out, tuple(in_ids), tuple(flips), nrm_of, tuple(notes), tuple(source))
+    return Attached(pieces, faces_out, tuple(in_ids), tuple(flips), nrm_of, tuple(notes), tuple(source), tuple(at))
 
 
 def _pinch(polygon: tuple[int, ...], fragment_vertices: dict[int, NDArray[np.float64]]) -> tuple[int, int] | None:
@@ -140,3 +144,47 @@ def _pinch(polygon: tuple[int, ...], fragment_vertices: dict[int, NDArray[np.flo
                 return seen[v], k
             seen[v] = k
     return None
+
+
+def fragment_bridge(vertices: NDArray[np.float64], normals: NDArray[np.float64], polygon: tuple[int, ...],
+                    attached: Attached, *, aim: float = 0.85) -> tuple[int, int, float] | None:
+    """The bridge that joins a fragment walked into a hole to the hole's border, or None.
+
+    ``polygon`` passes a fragment's attachment vertex twice; one side between the passes is the
+    fragment's loop, the other the rest of the hole. The bridge runs from a fragment vertex to a
+    border vertex of the other side (never the attachment vertex), both ends leaving into the gap:
+    with b the outward vector of the walk's frame (spec §2, b = tau x n, into the gap) and u the
+    unit direction A -> B, u . b_A > 0 and -u . b_B > 0. Among the pairs aimed within
+    acos(``aim``) of b at both ends (0.85: 32 degrees) the shortest is taken (the halves then have no
+    sliver at either end); if there is none, the best aimed. Returns (position A, position B, min(u . b_A, -u . b_B)).
+    """
+    from .holes import polygon_frame
+
+    pos: dict[int, list[int]] = {}
+    for k, v in enumerate(polygon):
+        pos.setdefault(v, []).append(k)
+    twice = [m for m in attached.attach if len(pos.get(m, [])) == 2]
+    if not twice:
+        return None
+    n = len(polygon)
+    p, q = pos[twice[0]]
+    inner = list(range(p + 1, q))
+    outer = [k % n for k in range(q + 1, p + n)]
+    if not all(polygon[k] in attached.normals for k in inner):
+        inner, outer = outer, inner
+    frag = [k for k in inner if polygon[k] in attached.normals]
+    rest = [k for k in outer if polygon[k] != twice[0]]
+    if not frag or not rest:
+        return None
+    fr = polygon_frame(vertices, normals, polygon)
+    a, b = np.asarray(frag), np.asarray(rest)
+    d = fr.points[b][None, :, :] - fr.points[a][:, None, :]
+    L = np.linalg.norm(d, axis=2)
+    u = d / np.maximum(L, 1e-300)[..., None]
+    cos = np.minimum(np.einsum("ijk,ik->ij", u, fr.outward[a]), -np.einsum("ijk,jk->ij", u, fr.outward[b]))
+    ok = cos >= aim
+    if ok.any():
+        i, j = np.unravel_index(int(np.argmin(np.where(ok, L, np.inf))), L.shape)
+    else:
+        i, j = np.unravel_index(int(np.argmax(cos)), cos.shape)
+    return int(a[i]), int(b[j]), float(cos[i, j])

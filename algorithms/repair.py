@@ -34,7 +34,7 @@ from .bridge_graph import (
     walk_holes,
 )
 from .creases import CreaseEnds, crease_corner, crease_ends, crease_split, hermite
-from .fragments import Attached, attach_fragments
+from .fragments import Attached, attach_fragments, fragment_bridge
 from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
 from .metrics import angle_stats, min_angles, topology
@@ -465,7 +465,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         line = None
         if len(set(poly)) != len(poly):
             # not a disk: join its two sides (the spec adds the next best bridge)
-            sb = _straight_bridge(V, N, poly, lc_used or spacing * 10, params.field.ki)
+            sb = (fragment_bridge(V, N, poly, attached) or
+                  _straight_bridge(V, N, poly, lc_used or spacing * 10, params.field.ki))
             if sb is None:
                 records.append(HoleRecord(poly, verdict, origin, -1, "not a disk and no bridge joins its sides"))
                 final.append(poly)
