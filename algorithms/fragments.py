@@ -13,8 +13,8 @@ polygon with the hole on its right everywhere (spec §6: the surface on the left
 The polygon is then not a disk and the pipeline joins its two sides by a bridge like any walk that
 passes a vertex twice (``fragment_bridge``: from a fragment vertex across the gap to the border,
 aimed along the border frames' outward vectors), and darns the halves; the fragment's faces become
-faces of the output with their vertices unchanged. The fragment's winding follows the surface: it is reversed (recorded)
-when its normal disagrees with the surface normal at ``m``.
+faces of the output with their vertices unchanged. The fragment's winding follows the surface: it
+is reversed (recorded) when its normal disagrees with the surface normal at ``m``.
 """
 
 from __future__ import annotations
@@ -81,12 +81,12 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
             if m < len(origin):
                 where.setdefault(int(origin[m]), []).append((k, m))
     for fids, faces in frags:
-        loops = boundary_loops(faces)
         attach = [int(x) for x in np.unique(faces) if used[x]]
         label = f"fragment of face(s) {fids}"
-        if len(loops) != 1 or euler_characteristic(faces) != 1 or not orientation_consistent(faces):
+        if not orientation_consistent(faces) or euler_characteristic(faces) != 1 or len(boundary_loops(faces)) != 1:
             notes.append(f"{label} left aside: not an oriented disk")
             continue
+        loops = boundary_loops(faces)
         if len(attach) != 1 or len(where.get(attach[0], [])) != 1:
             notes.append(f"{label} left aside: not hanging at one vertex of one hole")
             continue
