@@ -214,3 +214,27 @@ def test_fragment_touching_only_at_a_vertex_is_kept(flip, chain):
     assert np.abs(np.linalg.norm(res.mesh.vertices, axis=1) - 1).max() < 0.1
     if chain:  # the chain of two fragments cuts the hole in two before any bridge
         assert sum(h.origin == "loop" for h in res.holes) == 2
+
+
+@pytest.mark.parametrize("flip", [False, True])
+def test_fragment_walked_into_its_hole(flip):
+    from algorithms.boundary import vertex_normals
+    from algorithms.fragments import attach_fragments
+    from algorithms.topology import boundary_loops, orientation_consistent
+
+    v, f, frag = sphere_with_fragments(flip)
+    model = normalize(v, f)
+    loops = [tuple(int(x) for x in lp) for lp in boundary_loops(model.mesh.faces)]
+    att = attach_fragments(model, loops, vertex_normals(model.mesh))
+    assert len(att.polygons) == 1 and att.flipped == (flip,)
+    (m,) = att.attach
+    poly = att.polygons[0]
+    i, j = [k for k, x in enumerate(poly) if x == m]
+    # between the two passes of m: the fragment's other two vertices, in its output winding
+    assert j - i == 3 and set(poly[i + 1:j]) == set(frag.ravel()) - {m}
+    out = att.faces[0].tolist()
+    k = out.index(m)
+    assert out[k:] + out[:k] == [m, poly[i + 1], poly[i + 2]]
+    # with the fragment's faces the kept surface is consistently wound, and one walk's length longer
+    assert orientation_consistent(np.vstack([model.mesh.faces, att.faces]))
+    assert len(poly) == len(loops[0]) + 3
