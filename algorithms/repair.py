@@ -34,6 +34,7 @@ from .bridge_graph import (
     walk_holes,
 )
 from .creases import CreaseEnds, crease_corner, crease_ends, crease_split, hermite
+from .fragments import Attached, attach_fragments, fragment_bridge
 from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
 from .metrics import angle_stats, min_angles, topology
@@ -130,12 +131,16 @@ class RepairResult:
     lc: float = 0.0
     fairing: str = "none"  # the final fairing actually used
     tunnel_note: str = ""  # what the tunnel rule decided for each pair of loops
+    attached: Attached | None = None  # set-aside fragments put back into the output (algorithms.fragments)
 
     def report(self) -> dict:
         topo = topology(self.mesh.faces)
         patch = self.mesh.faces[self.new_faces]
         ang = angle_stats(min_angles(self.mesh.vertices, patch)) if len(patch) else None
         from .normalize import set_aside_summary
+
+        att = self.attached or Attached([], np.zeros((0, 3), dtype=np.int64))
+        n_frag_vertices = int((~self.model.mesh.referenced()[np.unique(att.faces)]).sum()) if len(att.faces) else 0
 
         return {
             "params": self.params.as_dict(),
@@ -162,7 +167,10 @@ class RepairResult:
                              "reasons": list(h.verdict.reasons), "split_by": h.split_by, "note": h.note}
                             for h in self.holes],
             },
-            "new_vertices": int(self.mesh.n_vertices - int(self.model.mesh.referenced().sum())),
+            "reattached": {"count": len(att.input_faces), "faces": list(att.input_faces),
+                           "flipped": [f for f, x in zip(att.input_faces, att.flipped) if x],
+                           "note": "set-aside fragments kept in the output (their vertices unchanged)"},
+            "new_vertices": int(self.mesh.n_vertices - int(self.model.mesh.referenced().sum()) - n_frag_vertices),
             "new_faces": int(len(self.new_faces)),
             "patch_angles": ang.as_dict() if ang else None,
             "output": {"watertight": topo.watertight, "components": topo.components, "euler": topo.euler,
@@ -396,13 +404,22 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         if not added:
             break
         holes = walk_holes(loops, bridges, chains)
+    # fragments set aside by normalisation that hang at one vertex of a hole: walked into the hole,
+    # their faces kept (algorithms.fragments)
+    attached = attach_fragments(model, [h.polygon for h in holes], work.N())
+    if len(attached.faces):
+        work.faces.append(attached.faces)
+        work.normals[0] = work.normals[0].copy()
+        for x, nx in attached.normals.items():
+            work.normals[0][x] = nx
+    notes += attached.notes
     timings["graph"] = time.perf_counter() - t0
     V = work.V()
     stages.append(Stage("bridges", f"{len(bridges)} bridges kept of {n_arrived} lines that arrived",
                         holes=tuple(f.points for f in frames),
                         bridges=tuple(b.polyline(V) for b in bridges)))
     stages.append(Stage("holes", f"{len(holes)} holes bounded by loops and bridges",
-                        holes=tuple(V[list(h.polygon)] for h in holes),
+                        holes=tuple(V[list(p)] for p in attached.polygons),
                         bridges=tuple(b.polyline(V) for b in bridges)))
     class_found = _class_found(n_isl, len(frames), any(b.kind == "tunnel" for b in bridges))
 
@@ -410,8 +427,9 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     t0 = time.perf_counter()
     test = params.test
     records: list[HoleRecord] = []
-    queue: list[tuple[tuple[int, ...], str, int]] = [(h.polygon, "loop" if not h.bridges else "bridges", 0)
-                                                     for h in holes]
+    queue: list[tuple[tuple[int, ...], str, int]] = [(p, "loop" if not h.bridges else "bridges", 0)
+                                                     for p, h in zip(attached.polygons,
+                                                                     (holes[k] for k in attached.source or ()))]
     final: list[tuple[int, ...]] = []
     any_complex = False
     ends = crease_ends(mesh.vertices, mesh.faces, params.crease_angle) if params.crease_angle < 180 else None
@@ -447,7 +465,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         line = None
         if len(set(poly)) != len(poly):
             # not a disk: join its two sides (the spec adds the next best bridge)
-            sb = _straight_bridge(V, N, poly, lc_used or spacing * 10, params.field.ki)
+            sb = (fragment_bridge(V, N, poly, attached) or
+                  _straight_bridge(V, N, poly, lc_used or spacing * 10, params.field.ki))
             if sb is None:
                 records.append(HoleRecord(poly, verdict, origin, -1, "not a disk and no bridge joins its sides"))
                 final.append(poly)
@@ -544,7 +563,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     step(1.0, "repaired")
     return RepairResult(out, model, params, class_found, tuple(bridges), tuple(lines), tuple(rejected),
                         tuple(records), tuple(stages), new_faces, timings, lc_used,
-                        timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "))
+                        timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "), attached)
 
 
 class _Incidence:

@@ -165,3 +165,76 @@ def test_sharp_edge_and_corner_continued_across_a_hole(where, center, radius):
     # the box's faces are planes: continuing the edge (and the corner) rebuilds them exactly
     assert d_sharp < 1e-4 and d_smooth > 0.02
     assert sharp.report()["patch_angles"]["min"] > 20
+
+
+def sphere_with_fragments(flip: bool = False, chain: bool = False):
+    """An icosphere with a hole in which input triangles of the cut are left hanging: one triangle
+    that touches the rest only at a vertex, or (chain) two triangles touching each other at a vertex
+    inside the hole and the rest at one vertex each. Returns (vertices, faces, fragment faces)."""
+    import trimesh
+
+    s = trimesh.creation.icosphere(subdivisions=3)
+    v, f = np.asarray(s.vertices), np.asarray(s.faces)
+    cut = np.linalg.norm(v[f].mean(axis=1) - v[0], axis=1) < 0.45
+    kept = f[~cut]
+    used = np.zeros(len(v), dtype=bool)
+    used[kept.ravel()] = True
+    one = [int(i) for i in np.flatnonzero(cut) if used[f[i]].sum() == 1]
+    if chain:
+        pairs = [(a, b) for a in one for b in one if a < b and len(set(f[a]) & set(f[b])) == 1
+                 and not used[list(set(f[a]) & set(f[b]))].any() and set(f[a][used[f[a]]]) != set(f[b][used[f[b]]])]
+        frag = f[list(pairs[0])]
+    else:
+        frag = f[one[:1]]
+    if flip:
+        frag = frag[:, ::-1]
+    return v, np.vstack([kept, frag]), frag
+
+
+@pytest.mark.parametrize("flip,chain", [(False, False), (True, False), (False, True)])
+def test_fragment_touching_only_at_a_vertex_is_kept(flip, chain):
+    v, f, frag = sphere_with_fragments(flip, chain)
+    model = normalize(v, f)
+    reasons = [s.reason for s in model.set_aside]
+    assert len(reasons) == len(frag) and all(r.startswith("fragment") for r in reasons)
+    res = repair(model)
+    # every input face is in the output with the same vertex coordinates
+    kin, kout = face_keys(v, f), face_keys(res.mesh.vertices, res.mesh.faces)
+    assert kin <= kout, f"{len(kin - kout)} input faces lost"
+    assert face_keys(v, frag) <= kout
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 1 and t.genus == 0
+    rep = res.report()
+    assert sorted(rep["reattached"]["faces"]) == sorted(s.face for s in model.set_aside)
+    assert len(rep["reattached"]["flipped"]) == (len(frag) if flip else 0)
+    # the fragment's vertices are not new vertices; the patch faces are the output minus the input faces
+    assert rep["new_faces"] == res.mesh.n_faces - len(f)
+    assert rep["new_vertices"] == res.mesh.n_vertices - len(np.unique(f))
+    # the repaired surface stays near the sphere (the fragment lies on it)
+    assert np.abs(np.linalg.norm(res.mesh.vertices, axis=1) - 1).max() < 0.1
+    if chain:  # the chain of two fragments cuts the hole in two before any bridge
+        assert sum(h.origin == "loop" for h in res.holes) == 2
+
+
+@pytest.mark.parametrize("flip", [False, True])
+def test_fragment_walked_into_its_hole(flip):
+    from algorithms.boundary import vertex_normals
+    from algorithms.fragments import attach_fragments
+    from algorithms.topology import boundary_loops, orientation_consistent
+
+    v, f, frag = sphere_with_fragments(flip)
+    model = normalize(v, f)
+    loops = [tuple(int(x) for x in lp) for lp in boundary_loops(model.mesh.faces)]
+    att = attach_fragments(model, loops, vertex_normals(model.mesh))
+    assert len(att.polygons) == 1 and att.flipped == (flip,)
+    (m,) = att.attach
+    poly = att.polygons[0]
+    i, j = [k for k, x in enumerate(poly) if x == m]
+    # between the two passes of m: the fragment's other two vertices, in its output winding
+    assert j - i == 3 and set(poly[i + 1:j]) == set(frag.ravel()) - {m}
+    out = att.faces[0].tolist()
+    k = out.index(m)
+    assert out[k:] + out[:k] == [m, poly[i + 1], poly[i + 2]]
+    # with the fragment's faces the kept surface is consistently wound, and one walk's length longer
+    assert orientation_consistent(np.vstack([model.mesh.faces, att.faces]))
+    assert len(poly) == len(loops[0]) + 3

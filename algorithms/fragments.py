@@ -1,0 +1,190 @@
+"""Fragments that touch the surface only at a vertex, put back into the repaired surface.
+
+Normalisation sets aside tiny islands that meet the rest of the surface only at a vertex (they
+would make that vertex non-manifold, and the field of spec §2 needs manifold loops). On a cut or
+scanned surface such a fragment is a piece of the surface left inside a hole, hanging at one vertex
+of the hole's border. The repair keeps it: the fragment's boundary loop is walked as part of the
+hole, so the hole polygon passes the attachment vertex twice,
+
+    ..., p, m, f1, ..., fk, m, q, ...
+
+(``m`` the hole's vertex, ``f1..fk`` the fragment's boundary loop in its positive direction), the
+polygon with the hole on its right everywhere (spec §6: the surface on the left of every walk).
+The polygon is then not a disk and the pipeline joins its two sides by a bridge like any walk that
+passes a vertex twice (``fragment_bridge``: from a fragment vertex across the gap to the border,
+aimed along the border frames' outward vectors), and darns the halves; the fragment's faces become
+faces of the output with their vertices unchanged. The fragment's winding follows the surface: it
+is reversed (recorded) when its normal disagrees with the surface normal at ``m``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .mesh import Icadm
+from .topology import boundary_loops, euler_characteristic, islands, orientation_consistent
+
+
+@dataclass(frozen=True, eq=False)
+class Attached:
+    """The fragments put back: hole polygons with the fragments' loops walked in, their faces."""
+
+    polygons: list[tuple[int, ...]]
+    faces: NDArray[np.int64]  # (K, 3) the fragments' faces over the model's vertices, output winding
+    input_faces: tuple[int, ...] = ()  # the input face of each row of ``faces``
+    flipped: tuple[bool, ...] = ()  # True where the winding was reversed to agree with the surface
+    normals: dict[int, NDArray[np.float64]] = field(default_factory=dict)  # loop vertex -> fragment normal
+    notes: tuple[str, ...] = ()
+    source: tuple[int, ...] | None = None  # index of the input polygon each polygon comes from (None: same order)
+    attach: tuple[int, ...] = ()  # the hole vertex each attached fragment hangs at
+
+
+def _fragments(model: Icadm) -> list[tuple[list[int], NDArray[np.int64]]]:
+    """The set-aside fragments, each as (input face ids, faces over input vertices)."""
+    ids = [s.face for s in model.set_aside if s.reason.startswith("fragment")]
+    if not ids:
+        return []
+    faces = np.array([next(s.vertices for s in model.set_aside if s.face == i) for i in ids], dtype=np.int64)
+    n, lab = islands(faces)
+    return [([ids[k] for k in np.flatnonzero(lab == i)], faces[lab == i]) for i in range(n)]
+
+
+def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
+                     normals: NDArray[np.float64]) -> Attached:
+    """Walk every set-aside fragment that hangs at one vertex of one hole polygon into that polygon.
+
+    polygons: hole polygons (surface on their left). normals: vertex normals of the working
+    vertex array (the model's vertices first). A fragment is attached when it is an oriented disk
+    (one boundary loop, Euler characteristic 1), exactly one of its vertices is used by the kept
+    surface, and that vertex occurs exactly once in all the polygons; others stay set aside (noted).
+    """
+    polys = [tuple(int(x) for x in p) for p in polygons]
+    out_f: list[NDArray[np.int64]] = []
+    in_ids: list[int] = []
+    at: list[int] = []
+    flips: list[bool] = []
+    nrm_of: dict[int, NDArray[np.float64]] = {}
+    notes: list[str] = []
+    frags = _fragments(model)
+    if not frags:
+        return Attached(polys, np.zeros((0, 3), dtype=np.int64), source=tuple(range(len(polys))))
+    V = model.mesh.vertices
+    origin = model.vertex_origin if model.vertex_origin is not None else np.arange(model.mesh.n_vertices)
+    used = np.zeros(len(V), dtype=bool)
+    used[np.asarray(origin)[model.mesh.faces.ravel()]] = True
+    where: dict[int, list[tuple[int, int]]] = {}  # input vertex -> (polygon, vertex) of each occurrence
+    for k, p in enumerate(polys):
+        for m in p:
+            if m < len(origin):
+                where.setdefault(int(origin[m]), []).append((k, m))
+    for fids, faces in frags:
+        attach = [int(x) for x in np.unique(faces) if used[x]]
+        label = f"fragment of face(s) {fids}"
+        if not orientation_consistent(faces) or euler_characteristic(faces) != 1 or len(boundary_loops(faces)) != 1:
+            notes.append(f"{label} left aside: not an oriented disk")
+            continue
+        loops = boundary_loops(faces)
+        if len(attach) != 1 or len(where.get(attach[0], [])) != 1:
+            notes.append(f"{label} left aside: not hanging at one vertex of one hole")
+            continue
+        a = attach[0]
+        k, m = where[a][0]
+        i = polys[k].index(m)
+        loop = [int(x) for x in loops[0]]
+        if a not in loop:
+            notes.append(f"{label} left aside: its attachment vertex is inside it")
+            continue
+        t = V[faces]
+        fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
+        flip = bool(fn @ normals[m] < 0)
+        if flip:  # reverse the winding: the loop runs the other way
+            faces = faces[:, ::-1]
+            loop = loop[::-1]
+            fn = -fn
+        s = loop.index(a)
+        walk = loop[s + 1:] + loop[:s]  # f1..fk: the loop after the attachment vertex
+        p = polys[k]
+        polys[k] = p[:i + 1] + tuple(walk) + (m,) + p[i + 1:]
+        out_f.append(np.where(faces == a, m, faces))
+        at.append(m)
+        in_ids += fids
+        flips += [flip] * len(fids)
+        unit = fn / max(float(np.linalg.norm(fn)), 1e-300)
+        for x in walk:
+            nrm_of[x] = unit
+        where.pop(a)  # one fragment per vertex: a second one there would need its own sector
+    # fragments that touch each other at a vertex (a chain of fragments across the hole): the walk
+    # passes that vertex twice, once on each fragment's loop; the chain cuts the hole in two there
+    pieces: list[tuple[int, ...]] = []
+    source: list[int] = []
+    for k, p in enumerate(polys):
+        stack = [p]
+        while stack:
+            q = stack.pop()
+            cut = _pinch(q, nrm_of)
+            if cut is None:
+                pieces.append(q)
+                source.append(k)
+            else:
+                i, j = cut
+                stack += [q[i:j], q[j:] + q[:i]]
+    faces_out = np.vstack(out_f) if out_f else np.zeros((0, 3), dtype=np.int64)
+    return Attached(pieces, faces_out, tuple(in_ids), tuple(flips), nrm_of, tuple(notes), tuple(source), tuple(at))
+
+
+def _pinch(polygon: tuple[int, ...], fragment_vertices: dict[int, NDArray[np.float64]]) -> tuple[int, int] | None:
+    """Positions (i, j) of the two passes of a fragment vertex the walk passes twice, or None."""
+    seen: dict[int, int] = {}
+    for k, v in enumerate(polygon):
+        if v in fragment_vertices:
+            if v in seen:
+                return seen[v], k
+            seen[v] = k
+    return None
+
+
+def fragment_bridge(vertices: NDArray[np.float64], normals: NDArray[np.float64], polygon: tuple[int, ...],
+                    attached: Attached, *, aim: float = 0.85) -> tuple[int, int, float] | None:
+    """The bridge that joins a fragment walked into a hole to the hole's border, or None.
+
+    ``polygon`` passes a fragment's attachment vertex twice; one side between the passes is the
+    fragment's loop, the other the rest of the hole. The bridge runs from a fragment vertex to a
+    border vertex of the other side (never the attachment vertex), both ends leaving into the gap:
+    with b the outward vector of the walk's frame (spec §2, b = tau x n, into the gap) and u the
+    unit direction A -> B, u . b_A > 0 and -u . b_B > 0. Among the pairs aimed within
+    acos(``aim``) of b at both ends (0.85: 32 degrees) the shortest is taken (the halves then have no
+    sliver at either end); if there is none, the best aimed. Returns (position A, position B, min(u . b_A, -u . b_B)).
+    """
+    from .holes import polygon_frame
+
+    pos: dict[int, list[int]] = {}
+    for k, v in enumerate(polygon):
+        pos.setdefault(v, []).append(k)
+    twice = [m for m in attached.attach if len(pos.get(m, [])) == 2]
+    if not twice:
+        return None
+    n = len(polygon)
+    p, q = pos[twice[0]]
+    inner = list(range(p + 1, q))
+    outer = [k % n for k in range(q + 1, p + n)]
+    if not all(polygon[k] in attached.normals for k in inner):
+        inner, outer = outer, inner
+    frag = [k for k in inner if polygon[k] in attached.normals]
+    rest = [k for k in outer if polygon[k] != twice[0]]
+    if not frag or not rest:
+        return None
+    fr = polygon_frame(vertices, normals, polygon)
+    a, b = np.asarray(frag), np.asarray(rest)
+    d = fr.points[b][None, :, :] - fr.points[a][:, None, :]
+    L = np.linalg.norm(d, axis=2)
+    u = d / np.maximum(L, 1e-300)[..., None]
+    cos = np.minimum(np.einsum("ijk,ik->ij", u, fr.outward[a]), -np.einsum("ijk,jk->ij", u, fr.outward[b]))
+    ok = cos >= aim
+    if ok.any():
+        i, j = np.unravel_index(int(np.argmin(np.where(ok, L, np.inf))), L.shape)
+    else:
+        i, j = np.unravel_index(int(np.argmax(cos)), cos.shape)
+    return int(a[i]), int(b[j]), float(cos[i, j])
