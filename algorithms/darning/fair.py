@@ -189,13 +189,12 @@ def tangential_relax(vertices: NDArray[np.float64], faces: NDArray[np.int64], fr
     if not len(free) or not len(f):
         return v
     L = uniform_laplacian(len(v), f)[free]
+    cols = f.T.ravel()
     for _ in range(iterations):  # sequential: each step starts from the previous positions
         t = v[f]
         fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-        vn = np.zeros_like(v)
-        for k in range(3):
-            np.add.at(vn, f[:, k], fn)
-        n = vn[free]
+        # vertex normals: the face normals summed per corner column (the order np.add.at would use)
+        n = np.stack([np.bincount(cols, weights=np.tile(fn[:, j], 3), minlength=len(v))[free] for j in range(3)], 1)
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
         d = L @ v  # centroid of the neighbours minus the vertex
         d -= np.einsum("ij,ij->i", d, n)[:, None] * n
