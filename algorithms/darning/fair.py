@@ -38,13 +38,20 @@ WEIGHTINGS = ("uniform", "cotan")
 
 def uniform_laplacian(n_vertices: int, faces: NDArray[np.int64]) -> sp.csr_matrix:
     """L = D^-1 A - I over the vertices; rows of vertices without edges are zero."""
+    n = int(n_vertices)
     e = edge_table(np.asarray(faces, dtype=np.int64)).edges
-    A = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(n_vertices, n_vertices)).tocsr()
-    deg = np.asarray(A.sum(axis=1)).ravel()
-    inv = np.divide(1.0, deg, out=np.zeros_like(deg), where=deg > 0)
-    has = (deg > 0).astype(np.float64)
-    return (sp.diags(inv) @ A - sp.diags(has)).tocsr()
+    r = np.concatenate([e[:, 0], e[:, 1]])
+    c = np.concatenate([e[:, 1], e[:, 0]])
+    deg = np.bincount(r, minlength=n)
+    has = np.flatnonzero(deg)
+    # built directly in CSR (rows in order, columns sorted): 1/deg off the diagonal, -1 on it
+    rows = np.concatenate([r, has])
+    cols = np.concatenate([c, has])
+    vals = np.concatenate([1.0 / deg[r], np.full(len(has), -1.0)])
+    order = np.lexsort((cols, rows))
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
+    return sp.csr_matrix((vals[order], cols[order], indptr), shape=(n, n))
 
 
 def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> sp.csr_matrix:
