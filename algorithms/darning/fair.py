@@ -73,11 +73,24 @@ def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> 
         rows += [a, b]
         cols += [b, a]
         vals += [cot / 2, cot / 2]
-    C = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
+    # C summed per vertex pair, then M^-1 (C - diag(C 1)) built directly in CSR (columns sorted,
+    # exact zeros left out, as the sparse products would leave them)
+    key, inv_key = np.unique(np.concatenate(rows) * n + np.concatenate(cols), return_inverse=True)
+    cv = np.bincount(inv_key.ravel(), weights=np.concatenate(vals), minlength=len(key))
+    r, c = key // n, key % n
     area = np.bincount(f.ravel(), weights=np.repeat(dbl / 6, 3), minlength=n)
     has = area > 0
     inv = np.divide(1.0, area, out=np.zeros(n), where=has)
-    return (sp.diags(inv) @ (C - sp.diags(np.asarray(C.sum(axis=1)).ravel()))).tocsr()
+    diag = np.arange(n)
+    R = np.concatenate([r, diag])
+    K = np.concatenate([c, diag])
+    val = inv[R] * np.concatenate([cv, -np.bincount(r, weights=cv, minlength=n)])
+    keep = val != 0
+    R, K, val = R[keep], K[keep], val[keep]
+    order = np.lexsort((K, R))
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(R, minlength=n), out=indptr[1:])
+    return sp.csr_matrix((val[order], K[order], indptr), shape=(n, n))
 
 
 def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
