@@ -83,12 +83,13 @@ def loop_frame(mesh: Mesh, loop: NDArray[np.int64], *, island: int = 0,
     return frame_of(mesh.vertices[loop], nrm, loop, island=island, charge=charge)
 
 
-def loop_frames(mesh: Mesh, *, charge: str = "length") -> list[LoopFrame]:
-    """Frames of every boundary loop of the mesh, with the island each belongs to."""
+def loop_frames(mesh: Mesh, *, charge: str = "length", labels: NDArray[np.int64] | None = None) -> list[LoopFrame]:
+    """Frames of every boundary loop of the mesh, with the island each belongs to (``labels``: the
+    faces' island labels when already known, as :func:`algorithms.topology.islands` gives them)."""
     loops = boundary_loops(mesh.faces)
     if not loops:
         return []
-    _, lab = islands(mesh.faces)
+    lab = islands(mesh.faces)[1] if labels is None else labels
     vert_island = np.full(mesh.n_vertices, -1, dtype=np.int64)
     vert_island[mesh.faces.ravel()] = np.repeat(lab, 3)
     normals = vertex_normals(mesh)
@@ -150,7 +151,7 @@ def summarize(model: Icadm, *, charge: str = "length") -> ModelSummary:
     """Islands, loops, Euler characteristic and genus per island, class guess."""
     mesh = model.mesh
     n, lab = islands(mesh.faces)
-    frames = loop_frames(mesh, charge=charge)
+    frames = loop_frames(mesh, charge=charge, labels=lab)
     areas = mesh.face_areas()
     infos = []
     for i in range(n):

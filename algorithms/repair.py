@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from .boundary import loop_frames, summarize, vertex_normals
+from .boundary import summarize, vertex_normals
 from .bridge_graph import (
     Bridge,
     ConflictRules,
@@ -237,8 +237,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             progress(frac, msg)
 
     mesh = model.mesh
-    summary = summarize(model)
-    frames = loop_frames(mesh, charge=params.field.charge)
+    summary = summarize(model, charge=params.field.charge)
+    frames = list(summary.loops)  # loop_frames(mesh, charge), walked once
     loops = [f.vertices for f in frames]
     n_isl = len(summary.islands)
     stages: list[Stage] = [Stage("input", f"{n_isl} islands, {len(frames)} boundary loops, "
@@ -728,9 +728,16 @@ def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operat
     orders / uniform weights when the system is singular (a free region without enough fixed rings
     around it)."""
     from .darning import plausible
-    from .darning.fair import fair
+    from .darning.fair import ORDERS, fair
 
     free = np.setdiff1d(np.arange(n_input, len(V)), keep_still if keep_still is not None else [])
+    # L^k at a free vertex reads L at the vertices up to k-1 rings out, and L there reads their
+    # faces: only the faces touching those vertices enter the system (not the whole intact surface)
+    near = np.zeros(len(V), dtype=bool)
+    near[free] = True
+    for _ in range(max(ORDERS.values()) - 1):
+        near[F[near[F].any(axis=1)].ravel()] = True
+    F = F[near[F].any(axis=1)]
     tries = [(operator, "cotan"), ("U2", "cotan"), ("U2", "uniform"), ("U1", "uniform")]
     for op, w in tries[tries.index((operator, "cotan")) if (operator, "cotan") in tries else 0:]:
         try:

@@ -38,13 +38,20 @@ WEIGHTINGS = ("uniform", "cotan")
 
 def uniform_laplacian(n_vertices: int, faces: NDArray[np.int64]) -> sp.csr_matrix:
     """L = D^-1 A - I over the vertices; rows of vertices without edges are zero."""
+    n = int(n_vertices)
     e = edge_table(np.asarray(faces, dtype=np.int64)).edges
-    A = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                      shape=(n_vertices, n_vertices)).tocsr()
-    deg = np.asarray(A.sum(axis=1)).ravel()
-    inv = np.divide(1.0, deg, out=np.zeros_like(deg), where=deg > 0)
-    has = (deg > 0).astype(np.float64)
-    return (sp.diags(inv) @ A - sp.diags(has)).tocsr()
+    r = np.concatenate([e[:, 0], e[:, 1]])
+    c = np.concatenate([e[:, 1], e[:, 0]])
+    deg = np.bincount(r, minlength=n)
+    has = np.flatnonzero(deg)
+    # built directly in CSR (rows in order, columns sorted): 1/deg off the diagonal, -1 on it
+    rows = np.concatenate([r, has])
+    cols = np.concatenate([c, has])
+    vals = np.concatenate([1.0 / deg[r], np.full(len(has), -1.0)])
+    order = np.lexsort((cols, rows))
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
+    return sp.csr_matrix((vals[order], cols[order], indptr), shape=(n, n))
 
 
 def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> sp.csr_matrix:
@@ -66,11 +73,24 @@ def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> 
         rows += [a, b]
         cols += [b, a]
         vals += [cot / 2, cot / 2]
-    C = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
+    # C summed per vertex pair, then M^-1 (C - diag(C 1)) built directly in CSR (columns sorted,
+    # exact zeros left out, as the sparse products would leave them)
+    key, inv_key = np.unique(np.concatenate(rows) * n + np.concatenate(cols), return_inverse=True)
+    cv = np.bincount(inv_key.ravel(), weights=np.concatenate(vals), minlength=len(key))
+    r, c = key // n, key % n
     area = np.bincount(f.ravel(), weights=np.repeat(dbl / 6, 3), minlength=n)
     has = area > 0
     inv = np.divide(1.0, area, out=np.zeros(n), where=has)
-    return (sp.diags(inv) @ (C - sp.diags(np.asarray(C.sum(axis=1)).ravel()))).tocsr()
+    diag = np.arange(n)
+    R = np.concatenate([r, diag])
+    K = np.concatenate([c, diag])
+    val = inv[R] * np.concatenate([cv, -np.bincount(r, weights=cv, minlength=n)])
+    keep = val != 0
+    R, K, val = R[keep], K[keep], val[keep]
+    order = np.lexsort((K, R))
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(R, minlength=n), out=indptr[1:])
+    return sp.csr_matrix((val[order], K[order], indptr), shape=(n, n))
 
 
 def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
@@ -189,13 +209,12 @@ def tangential_relax(vertices: NDArray[np.float64], faces: NDArray[np.int64], fr
     if not len(free) or not len(f):
         return v
     L = uniform_laplacian(len(v), f)[free]
+    cols = f.T.ravel()
     for _ in range(iterations):  # sequential: each step starts from the previous positions
         t = v[f]
         fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-        vn = np.zeros_like(v)
-        for k in range(3):
-            np.add.at(vn, f[:, k], fn)
-        n = vn[free]
+        # vertex normals: the face normals summed per corner column (the order np.add.at would use)
+        n = np.stack([np.bincount(cols, weights=np.tile(fn[:, j], 3), minlength=len(v))[free] for j in range(3)], 1)
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
         d = L @ v  # centroid of the neighbours minus the vertex
         d -= np.einsum("ij,ij->i", d, n)[:, None] * n

@@ -22,6 +22,7 @@ non-manifold edges); they get an infinite weight.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -130,27 +131,44 @@ def _dp_fast(p: NDArray[np.float64], weight: str,
     S[:, 1] = 0.0
     T[:, 1] = 0.0
     M = np.full((n, n), -1, dtype=np.int64)
-    for d in range(2, n):  # sequential: diagonal d needs every shorter diagonal
-        rows = n - d
-        i = np.arange(rows)
-        k = i + d
-        cand = S[:rows, 1:d] + T[d:n, d - 1:0:-1]
-        if weight == "length":
-            cand = cand + DS[:rows, 1:d] + DT[d:n, d - 1:0:-1] + DS[:rows, d][:, None]
-        else:
-            sq = np.zeros_like(cand)
-            for c in range(3):  # the three coordinates of (v_m - v_i) x (v_k - v_i)
-                nc = CS[c, :rows, 1:d] + CT[c, d:n, d - 1:0:-1] - CS[c, :rows, d][:, None]
-                sq += nc * nc
-            cand = cand + 0.5 * np.sqrt(sq)
-        best = np.argmin(cand, axis=1)
-        w = cand[i, best]
-        if forbidden is not None and d < n - 1:
-            w = np.where(forbidden[i, k], np.inf, w)
-        S[i, d] = w
-        T[k, d] = w
-        M[i, k] = i + 1 + best
+    if weight == "length":
+        CS = CT = np.zeros((3, 0, 0))
+    else:
+        DS = DT = np.zeros((0, 0))
+    fb = np.zeros((0, 0), dtype=np.bool_) if forbidden is None else np.ascontiguousarray(forbidden, dtype=np.bool_)
+    _dp_diagonals(CS, CT, DS, DT, weight == "length", fb, forbidden is not None, S, T, M)
     return float(S[0, n - 1]), M
+
+
+@numba.njit(cache=True)
+def _dp_diagonals(CS, CT, DS, DT, length, forbidden, has_forbidden, S, T, M):  # pragma: no cover - compiled
+    """The diagonals of _dp_fast, compiled: for diagonal d and row i (k = i + d), the candidate
+    m = i + j (j = 1..d-1) costs S[i, j] + T[k, d-j] + the triangle (i, m, k)'s weight, summed in
+    the order the vectorised form used; the first minimum wins (np.argmin's rule)."""
+    n = S.shape[0]
+    for d in range(2, n):  # sequential: diagonal d needs every shorter diagonal
+        for i in range(n - d):
+            k = i + d
+            best = np.inf
+            bj = 0
+            for j in range(1, d):
+                c = S[i, j] + T[k, d - j]
+                if length:
+                    c = c + DS[i, j] + DT[k, d - j] + DS[i, d]
+                else:
+                    sq = 0.0
+                    for a in range(3):  # the three coordinates of (v_m - v_i) x (v_k - v_i)
+                        nc = CS[a, i, j] + CT[a, k, d - j] - CS[a, i, d]
+                        sq += nc * nc
+                    c = c + 0.5 * np.sqrt(sq)
+                if c < best:
+                    best = c
+                    bj = j - 1
+            if has_forbidden and d < n - 1 and forbidden[i, k]:
+                best = np.inf
+            S[i, d] = best
+            T[k, d] = best
+            M[i, k] = i + 1 + bj
 
 
 def _dp_dihedral(p: NDArray[np.float64], forbidden: NDArray[np.bool_] | None,

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..topology import edge_table, halfedges
+from .flips import flip_passes
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,78 +72,15 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
     number of flips).
     """
     p = np.asarray(vertices, dtype=np.float64)
-    f = np.array(patch, dtype=np.int64, copy=True)
+    f = np.array(patch, dtype=np.int64, copy=True).reshape(-1, 3)
     fixed = np.asarray(fixed_faces, dtype=np.int64).reshape(-1, 3)
     nv = len(p)
     fixed_keys = (np.unique(np.sort(halfedges(fixed), axis=1) @ np.array([nv, 1])) if len(fixed)
                   else np.zeros(0, np.int64))
     locked_keys = (np.unique(np.sort(np.asarray(locked, dtype=np.int64), axis=1) @ np.array([nv, 1]))
                    if locked is not None and len(locked) else np.zeros(0, np.int64))
-    total = 0
-    active = np.ones(len(f), dtype=bool)  # faces a flip may involve (after a pass: the flipped ones)
-
-    def _has(sorted_keys: NDArray[np.int64], k: NDArray[np.int64]) -> NDArray[np.bool_]:
-        if not len(sorted_keys):
-            return np.zeros(len(k), dtype=bool)
-        i = np.minimum(np.searchsorted(sorted_keys, k), len(sorted_keys) - 1)
-        return sorted_keys[i] == k
-
-    for _ in range(max_passes):  # sequential: each pass works on the previous pass's faces
-        he = halfedges(f)
-        key = he[:, 0] * nv + he[:, 1]
-        twin_key = he[:, 1] * nv + he[:, 0]
-        order = np.argsort(key)
-        skey = key[order]
-        pos = np.minimum(np.searchsorted(skey, twin_key), len(key) - 1)
-        has = skey[pos] == twin_key
-        h1 = np.flatnonzero(has & (he[:, 0] < he[:, 1]))  # each interior edge once
-        h2 = order[pos[h1]]
-        near = active[h1 // 3] | active[h2 // 3]  # an edge can only turn non-Delaunay next to a flip
-        h1, h2 = h1[near], h2[near]
-        if not len(h1):
-            break
-        f1, f2 = h1 // 3, h2 // 3
-        a, b = he[h1, 0], he[h1, 1]
-        kc, kd = (h1 % 3 + 2) % 3, (h2 % 3 + 2) % 3
-        c = f[f1, kc]
-        d = f[f2, kd]
-        alpha = _angle_at(p, c, a, b)
-        beta = _angle_at(p, d, a, b)
-        score = alpha + beta - np.pi
-        ok = (score > 1e-9) & (c != d) & ~_has(locked_keys, np.minimum(a, b) * nv + np.maximum(a, b))
-        if not ok.any():
-            break
-        # the new edge must not exist yet (in the patch, either direction, or among the fixed faces)
-        ek = np.minimum(c, d) * nv + np.maximum(c, d)
-        ok &= ~_has(skey, c * nv + d) & ~_has(skey, d * nv + c) & ~_has(fixed_keys, ek)
-        # no fold: new faces (c, a, d) and (d, b, c) must face like the old pair
-        n_old = np.cross(p[b] - p[a], p[c] - p[a]) + np.cross(p[a] - p[b], p[d] - p[b])
-        n1 = np.cross(p[a] - p[c], p[d] - p[c])
-        n2 = np.cross(p[b] - p[d], p[c] - p[d])
-        ok &= (np.einsum("ij,ij->i", n1, n_old) > 0) & (np.einsum("ij,ij->i", n2, n_old) > 0)
-        cand = np.flatnonzero(ok)
-        if not len(cand):
-            break
-        # independent set: each face picks its most violating candidate edge
-        cand = cand[np.argsort(-score[cand], kind="stable")]
-        fc = np.concatenate([f1[cand], f2[cand]])
-        ec = np.concatenate([cand, cand])
-        prio = np.concatenate([np.arange(len(cand)), np.arange(len(cand))])
-        o = np.lexsort((prio, fc))
-        first = np.ones(len(o), dtype=bool)
-        first[1:] = fc[o][1:] != fc[o][:-1]
-        chosen = np.full(len(f), -1)
-        chosen[fc[o][first]] = ec[o][first]
-        sel = cand[(chosen[f1[cand]] == cand) & (chosen[f2[cand]] == cand)]
-        # two flips must not create the same edge
-        _, uniq = np.unique(ek[sel], return_index=True)
-        sel = sel[np.sort(uniq)]
-        f[f1[sel]] = np.stack([c[sel], a[sel], d[sel]], 1)
-        f[f2[sel]] = np.stack([d[sel], b[sel], c[sel]], 1)
-        total += len(sel)
-        active[:] = False
-        active[f1[sel]] = True
-        active[f2[sel]] = True
+    # the passes (the independent sets, the refusals) run compiled: flips.flip_passes
+    total = int(flip_passes(p, f, fixed_keys, locked_keys, int(max_passes)))
     return f, total
 
 
