@@ -146,9 +146,13 @@ def test_animation_of_a_500_step_line(qtbot, win):
     tl.speed.setValue(250)  # 500 steps in 2 s
     r0, f0 = win.scene.renders, tl.frames_shown
     t0 = time.perf_counter()
+    islands = win.scene.layers.actor("islands").GetProperty()
+    assert islands.GetEdgeVisibility()
     tl.play()
+    assert not islands.GetEdgeVisibility()  # level of detail while playing: no triangle edges
     qtbot.waitUntil(lambda: not tl.playing, timeout=10_000)
     dt = time.perf_counter() - t0
+    assert islands.GetEdgeVisibility()  # back when it stops
     shown = (tl.frames_shown - f0) / dt
     print(f"timeline frame updates {update_fps:.0f}/s; playing with renders of a "
           f"{win.scene.plotter.window_size} view: {shown:.1f} frames/s, "

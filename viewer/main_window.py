@@ -260,6 +260,7 @@ class MainWindow(QMainWindow):
         self.parameters.layerToggled.connect(self.set_layer_visible)
         self.scene.pickedBoundary.connect(self.trace_from)
         self.scene.pickedBridge.connect(self.model.select)
+        self.timeline.playingChanged.connect(self.scene.set_playing)
         m.darningChanged.connect(self._darning_changed)
         m.repairChanged.connect(self._repair_shown)
         m.timelineModeChanged.connect(self._timeline_mode_shown)

@@ -97,6 +97,8 @@ class SceneLayers:
         self._line: ForceLine | None = None
         self._arrows: dict[str, pv.PolyData] = {}
         self._bridge_polys: list[np.ndarray] = []
+        self._edges = False  # the islands are drawn with their triangle edges
+        self._fast = False  # level of detail while an animation plays (set_fast)
         self.meshes: dict[str, pv.PolyData] = {}
         self._tubes_drawn: tuple[list, pv.PolyData] | None = None  # (kept polylines, their tubes)
         self.stage_mode = False  # the timeline shows the repair's stages: field layers hidden
@@ -181,8 +183,9 @@ class SceneLayers:
             pd = polydata(mesh)
             pd.cell_data["island"] = lab
             colours = [ISLAND_COLOURS[i % len(ISLAND_COLOURS)] for i in range(int(lab.max()) + 1)]
+            self._edges = mesh.n_faces < 20000
             self._add(pd, "islands", "islands", scalars="island", cmap=colours, categories=True,
-                      show_scalar_bar=False, smooth_shading=False, show_edges=mesh.n_faces < 20000,
+                      show_scalar_bar=False, smooth_shading=False, show_edges=self._edges and not self._fast,
                       edge_color="#7a8793", line_width=0.5, pickable=True)
         else:
             self._remove("islands")
@@ -196,6 +199,19 @@ class SceneLayers:
                       point_size=9, render_points_as_spheres=True, pickable=False)
         else:
             self._remove("free_points")
+
+    def set_fast(self, on: bool) -> bool:
+        """Level of detail while an animation plays: the islands' triangle edges hidden (on) or as
+        drawn (off). Returns whether anything changed."""
+        self._fast = bool(on)
+        a = self.actor("islands")
+        if a is None or not self._edges:
+            return False
+        want = not self._fast
+        if bool(a.GetProperty().GetEdgeVisibility()) == want:
+            return False
+        a.GetProperty().SetEdgeVisibility(want)
+        return True
 
     def frame_camera(self) -> None:
         self._here()

@@ -140,6 +140,12 @@ class SceneView(QObject):
         self.layers.set_visible(layer, on)
         self.request_render()
 
+    def set_playing(self, on: bool) -> None:
+        """While the timeline plays, draw the islands without their triangle edges (the costliest
+        pass of software GL); the edges come back when it stops."""
+        if self.layers.set_fast(on):
+            self.request_render()
+
     # ---------------------------------------------------------------- picking
     def on_pick(self, point, *_) -> None:
         """The picker's handler (also called by tests): a bridge near the point is selected,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 
-from PySide6.QtCore import Qt, QTimer
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
     QCheckBox,
     QComboBox,
@@ -31,6 +31,8 @@ MODE_TITLES = ("Force line", "Repair stages")
 
 
 class TimelinePanel(QWidget):
+    playingChanged = Signal(bool)  # playback started (True) or stopped (False)
+
     def __init__(self, model, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.model = model
@@ -171,12 +173,18 @@ class TimelinePanel(QWidget):
             self.goto(0)
         self._t_last = time.perf_counter()
         self._acc = 0.0
+        was = self.timer.isActive()
         self.timer.start(TICK_MS)
         self.play_button.setIcon(self.style().standardIcon(QStyle.SP_MediaPause))
+        if not was:
+            self.playingChanged.emit(True)
 
     def pause(self) -> None:
+        was = self.timer.isActive()
         self.timer.stop()
         self.play_button.setIcon(self.style().standardIcon(QStyle.SP_MediaPlay))
+        if was:
+            self.playingChanged.emit(False)
 
     def toggle_play(self) -> None:
         self.pause() if self.playing else self.play()
