@@ -149,10 +149,13 @@ def test_animation_of_a_500_step_line(qtbot, win):
     islands = win.scene.layers.actor("islands").GetProperty()
     assert islands.GetEdgeVisibility()
     tl.play()
-    assert not islands.GetEdgeVisibility()  # level of detail while playing: no triangle edges
+    assert not islands.GetEdgeVisibility()  # level of detail while playing: no triangle edges,
+    halo = win.scene.layers.actor("selection")
+    assert halo is None or not halo.GetVisibility()  # no translucent halo
     qtbot.waitUntil(lambda: not tl.playing, timeout=10_000)
     dt = time.perf_counter() - t0
     assert islands.GetEdgeVisibility()  # back when it stops
+    assert halo is None or halo.GetVisibility()
     shown = (tl.frames_shown - f0) / dt
     print(f"timeline frame updates {update_fps:.0f}/s; playing with renders of a "
           f"{win.scene.plotter.window_size} view: {shown:.1f} frames/s, "

@@ -155,7 +155,7 @@ class SceneLayers:
         for name in names.get(layer, (layer,)):
             a = self.actor(name)
             if a is not None:
-                a.SetVisibility(bool(on))
+                a.SetVisibility(bool(on) and not (name == "selection" and self._fast))
         if layer == "attraction":
             self._bar_visible(self.bar_title(OMEGA_BAR), on)
         if layer == "bridges":
@@ -201,17 +201,18 @@ class SceneLayers:
             self._remove("free_points")
 
     def set_fast(self, on: bool) -> bool:
-        """Level of detail while an animation plays: the islands' triangle edges hidden (on) or as
-        drawn (off). Returns whether anything changed."""
+        """Level of detail while an animation plays (on): the islands' triangle edges and the
+        selected bridge's translucent halo (a translucent pass) hidden, the animated line marking
+        the selection; off: as drawn. Returns whether anything changed."""
+        changed = self._fast != bool(on)
         self._fast = bool(on)
+        self._apply_visibility("bridges")
         a = self.actor("islands")
-        if a is None or not self._edges:
-            return False
-        want = not self._fast
-        if bool(a.GetProperty().GetEdgeVisibility()) == want:
-            return False
-        a.GetProperty().SetEdgeVisibility(want)
-        return True
+        if a is not None and self._edges:
+            want = not self._fast
+            if bool(a.GetProperty().GetEdgeVisibility()) != want:
+                a.GetProperty().SetEdgeVisibility(want)
+        return changed
 
     def frame_camera(self) -> None:
         self._here()
@@ -311,6 +312,7 @@ class SceneLayers:
         if not t.n_points:
             return
         self._add(t, "selection", "bridges", color="#ffdd00", opacity=0.45, pickable=False)
+        self._apply_visibility("bridges")  # the translucent halo stays hidden while an animation plays
 
     # ---------------------------------------------------------------- the repair
     def draw_patches(self, vertices, faces) -> None:
