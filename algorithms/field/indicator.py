@@ -90,25 +90,30 @@ def _q1(l2, lc2, kernel):
     return 1.0 / (1.0 + l2 / lc2)
 
 
+@numba.njit(cache=True)
+def _excluded(i, j, xgrp, xloop, xpos, xwin, sgrp, sloop, spos, slen):
+    """Is source j excluded for point i: the same group (its own island), or on the point's own
+    loop within its window of positions (hole splitting, tunnels)?"""
+    if sgrp[j] == xgrp[i]:
+        return True
+    if xwin[i] >= 0 and sloop[j] == xloop[i]:
+        dp = abs(spos[j] - xpos[i])
+        dp = min(dp, slen[j] - dp)
+        if dp <= xwin[i]:
+            return True
+    return False
+
+
 @numba.njit(cache=True, fastmath=True)
-def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
-                 out_h, out_near, out_dist):
-    """Light mode (M1) at point i: H, no shielding, q12 = q1(L). Also the nearest source."""
-    m = o.shape[0]
+def _nearest_admissible(i, x, xgrp, xloop, xpos, xwin, o, sgrp, sloop, spos, slen, plain):
+    """(squared distance, index) of the nearest source point i may use (index -1 if none):
+    pass 1 of both kernels, no exp, cheap."""
     x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
-    h00 = h01 = h02 = h10 = h11 = h12 = h20 = h21 = h22 = 0.0
     best = 1e300
     bj = -1
-    plain = xgrp[i] == NO_GROUP and xwin[i] < 0
-    for j in range(m):  # pass 1: the nearest admissible source (no exp: cheap)
-        if not plain:
-            if sgrp[j] == xgrp[i]:
-                continue
-            if xwin[i] >= 0 and sloop[j] == xloop[i]:
-                dp = abs(spos[j] - xpos[i])
-                dp = min(dp, slen[j] - dp)
-                if dp <= xwin[i]:
-                    continue
+    for j in range(o.shape[0]):
+        if not plain and _excluded(i, j, xgrp, xloop, xpos, xwin, sgrp, sloop, spos, slen):
+            continue
         r0 = o[j, 0] - x0
         r1 = o[j, 1] - x1
         r2 = o[j, 2] - x2
@@ -116,16 +121,22 @@ def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos,
         if l2 < best:
             best = l2
             bj = j
+    return best, bj
+
+
+@numba.njit(cache=True, fastmath=True)
+def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
+                 out_h, out_near, out_dist):
+    """Light mode (M1) at point i: H, no shielding, q12 = q1(L). Also the nearest source."""
+    m = o.shape[0]
+    x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+    h00 = h01 = h02 = h10 = h11 = h12 = h20 = h21 = h22 = 0.0
+    plain = xgrp[i] == NO_GROUP and xwin[i] < 0
+    best, bj = _nearest_admissible(i, x, xgrp, xloop, xpos, xwin, o, sgrp, sloop, spos, slen, plain)
     lim = best + prune2  # relative pruning: weight below exp(-16) of the nearest source's
     for j in range(m):  # pass 2: the field
-        if not plain:
-            if sgrp[j] == xgrp[i]:
-                continue
-            if xwin[i] >= 0 and sloop[j] == xloop[i]:
-                dp = abs(spos[j] - xpos[i])
-                dp = min(dp, slen[j] - dp)
-                if dp <= xwin[i]:
-                    continue
+        if not plain and _excluded(i, j, xgrp, xloop, xpos, xwin, sgrp, sloop, spos, slen):
+            continue
         r0 = o[j, 0] - x0
         r1 = o[j, 1] - x1
         r2 = o[j, 2] - x2
@@ -361,26 +372,9 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     xi = x[i]
     bv = (node_box, node_child, node_start, node_count, tri, tri_vertex, tri_normal, scale)
     gr = (g_origin, g_cell, g_dims, g_lattice)
-    best = 1e300
-    bj = -1
     plain = xgrp[i] == NO_GROUP and xwin[i] < 0  # no source excluded: the loops below skip the tests
     x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
-    for j in range(m):  # pass 1: the nearest admissible source
-        if not plain:
-            if sgrp[j] == xgrp[i]:
-                continue
-            if xwin[i] >= 0 and sloop[j] == xloop[i]:
-                dp = abs(spos[j] - xpos[i])
-                dp = min(dp, slen[j] - dp)
-                if dp <= xwin[i]:
-                    continue
-        r0 = o[j, 0] - x0
-        r1 = o[j, 1] - x1
-        r2 = o[j, 2] - x2
-        l2 = r0 * r0 + r1 * r1 + r2 * r2
-        if l2 < best:
-            best = l2
-            bj = j
+    best, bj = _nearest_admissible(i, x, xgrp, xloop, xpos, xwin, o, sgrp, sloop, spos, slen, plain)
     # pass 2: the candidates, pruned relative to the nearest source:
     # (L * shrink)^2 - best > prune2, shrink = 1 / (1 + G(0)) in full mode with free points
     cand = np.empty(m, dtype=np.int64)
@@ -391,14 +385,8 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
         for j in range(m):
             kv[row, j] = -2  # excluded
     for j in range(m):
-        if not plain:
-            if sgrp[j] == xgrp[i]:
-                continue
-            if xwin[i] >= 0 and sloop[j] == xloop[i]:
-                dp = abs(spos[j] - xpos[i])
-                dp = min(dp, slen[j] - dp)
-                if dp <= xwin[i]:
-                    continue
+        if not plain and _excluded(i, j, xgrp, xloop, xpos, xwin, sgrp, sloop, spos, slen):
+            continue
         r0 = o[j, 0] - x0
         r1 = o[j, 1] - x1
         r2 = o[j, 2] - x2
