@@ -12,10 +12,9 @@ import numpy as np
 import pytest
 
 pytest.importorskip("pytestqt")
-from PySide6.QtCore import QSettings  # noqa: E402
 from PySide6.QtWidgets import QApplication, QFileDialog, QMessageBox  # noqa: E402
+from viewer_fakes import explorer_window  # noqa: E402
 
-from viewer.main_window import MainWindow  # noqa: E402
 from viewer.workspaces import FrepWorkspace, HybridWorkspace  # noqa: E402
 
 pytestmark = pytest.mark.gui
@@ -23,13 +22,7 @@ pytestmark = pytest.mark.gui
 
 @pytest.fixture
 def win(qtbot, tmp_path):
-    w = MainWindow(settings=QSettings(str(tmp_path / "settings.ini"), QSettings.IniFormat))
-    qtbot.addWidget(w)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.close()
-    assert w.worker.running() == 0
+    yield from explorer_window(qtbot, tmp_path)
 
 
 def menu_action(menu, prefix: str):

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 pytest.importorskip("pytestqt")
-from PySide6.QtCore import QSettings, Qt  # noqa: E402
+from PySide6.QtCore import Qt  # noqa: E402
+from viewer_fakes import explorer_window  # noqa: E402
 
 from algorithms.io import load_model  # noqa: E402
 from algorithms.metrics import topology  # noqa: E402
-from viewer.main_window import MainWindow  # noqa: E402
 from viewer.scene import bridge_verdicts  # noqa: E402
 from viewer.stages import patch_faces_by_hole, stage_frames  # noqa: E402
 
@@ -24,13 +24,7 @@ pytestmark = pytest.mark.gui
 
 @pytest.fixture
 def win(qtbot, tmp_path):
-    w = MainWindow(settings=QSettings(str(tmp_path / "settings.ini"), QSettings.IniFormat))
-    qtbot.addWidget(w)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.close()
-    assert w.worker.running() == 0
+    yield from explorer_window(qtbot, tmp_path)
 
 
 def repaired(qtbot, w, name="two-caps"):

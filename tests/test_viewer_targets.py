@@ -21,6 +21,7 @@ import pytest
 
 pytest.importorskip("pytestqt")
 from PySide6.QtCore import QSettings, Qt, QTimer  # noqa: E402
+from viewer_fakes import explorer_window  # noqa: E402
 
 from viewer.main_window import MainWindow  # noqa: E402
 from viewer.scene import kept_mask  # noqa: E402
@@ -37,16 +38,11 @@ def load() -> str:
 
 @pytest.fixture
 def win(qtbot, tmp_path):
-    w = MainWindow(settings=QSettings(str(tmp_path / "settings.ini"), QSettings.IniFormat))
-    qtbot.addWidget(w)
-    w.show()
-    qtbot.waitExposed(w)
-    w.open_demo("two-caps")
-    qtbot.waitUntil(lambda: w.model.result is not None, timeout=60_000)
-    qtbot.wait(300)
-    yield w
-    w.close()
-    assert w.worker.running() == 0
+    for w in explorer_window(qtbot, tmp_path):
+        w.open_demo("two-caps")
+        qtbot.waitUntil(lambda: w.model.result is not None, timeout=60_000)
+        qtbot.wait(300)
+        yield w
 
 
 def test_first_frame_within_3_s(qtbot, tmp_path):

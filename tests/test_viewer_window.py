@@ -15,7 +15,7 @@ import pytest
 
 pytest.importorskip("pytestqt")
 from PySide6.QtCore import QSettings, Qt  # noqa: E402
-from viewer_fakes import fake_bridges, fake_trace  # noqa: E402
+from viewer_fakes import explorer_window, fake_bridges, fake_trace  # noqa: E402
 
 from viewer.main_window import MainWindow  # noqa: E402
 from viewer.scene import QUALITY_BAR  # noqa: E402
@@ -23,14 +23,7 @@ from viewer.scene import QUALITY_BAR  # noqa: E402
 
 @pytest.fixture
 def win(qtbot, tmp_path):
-    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.IniFormat)
-    w = MainWindow(settings=settings, find=fake_bridges, trace=fake_trace)
-    qtbot.addWidget(w)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.close()
-    assert w.worker.running() == 0
+    yield from explorer_window(qtbot, tmp_path, find=fake_bridges, trace=fake_trace)
 
 
 def open_demo(qtbot, w, name="two-caps"):

@@ -78,3 +78,19 @@ def busy_python(seconds: float) -> int:
     while time.perf_counter() - t0 < seconds:
         k += 1
     return k
+
+
+def explorer_window(qtbot, tmp_path, **kw):
+    """The explorer's main window with its own settings file, shown and exposed; yields it, then
+    closes it and checks that no worker thread is left running (use as ``yield from``)."""
+    from PySide6.QtCore import QSettings
+
+    from viewer.main_window import MainWindow
+
+    w = MainWindow(settings=QSettings(str(tmp_path / "settings.ini"), QSettings.IniFormat), **kw)
+    qtbot.addWidget(w)
+    w.show()
+    qtbot.waitExposed(w)
+    yield w
+    w.close()
+    assert w.worker.running() == 0
