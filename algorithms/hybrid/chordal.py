@@ -14,6 +14,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 
+def gauss_newton_step(ru: NDArray[np.float64], rv: NDArray[np.float64],
+                      r: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """One Gauss-Newton step of min |R(u, v) - target|^2 for many points at once: (du, dv) solving
+    the 2x2 normal equations J^T J d = J^T r with J = [ru rv] (..., 3) and r = target - R(u, v);
+    (0, 0) where J^T J is singular. The surface circumcentre (eq. 7), the chordal error and
+    smoothing's moves on the surface all take this step."""
+    a11, a12, a22 = (ru * ru).sum(-1), (ru * rv).sum(-1), (rv * rv).sum(-1)
+    g1, g2 = (ru * r).sum(-1), (rv * r).sum(-1)
+    det = a11 * a22 - a12 * a12
+    ok = det > 0
+    det = np.where(ok, det, 1.0)
+    return np.where(ok, (a22 * g1 - a12 * g2) / det, 0.0), np.where(ok, (a11 * g2 - a12 * g1) / det, 0.0)
+
+
 def chordal_errors(surface, T3: NDArray[np.float64], T2: NDArray[np.float64]) -> NDArray[np.float64]:
     """(K,) chordal error of triangles T3 (K, 3, 3) whose vertices have parameters T2 (K, 3, 2)."""
     return sample_errors(surface, T3, T2).max(axis=1) if len(T3) else np.zeros(0)
@@ -30,13 +44,7 @@ def sample_errors(surface, T3: NDArray[np.float64], T2: NDArray[np.float64]) -> 
     R = q[0]
     ru, rv = (q[1] - R) / hu, (q[2] - R) / hv
     r = S3 - R
-    a11, a12, a22 = (ru * ru).sum(-1), (ru * rv).sum(-1), (rv * rv).sum(-1)
-    g1, g2 = (ru * r).sum(-1), (rv * r).sum(-1)
-    det = a11 * a22 - a12 * a12
-    ok = det > 0
-    det = np.where(ok, det, 1.0)
-    du = np.where(ok, (a22 * g1 - a12 * g2) / det, 0.0)
-    dv = np.where(ok, (a11 * g2 - a12 * g1) / det, 0.0)
+    du, dv = gauss_newton_step(ru, rv, r)
     R2 = surface(np.clip(u + du, a, b), np.clip(v + dv, c, d))
     dist = np.minimum(np.sqrt(((R2 - S3) ** 2).sum(-1)), np.sqrt((r * r).sum(-1)))
     return dist

@@ -19,7 +19,7 @@ import numpy as np
 
 from .border import CURVE
 from .cdt import BLOCKED, Triangulation
-from .chordal import chordal_errors
+from .chordal import chordal_errors, gauss_newton_step
 from .incircle import circumcentre_3d, circumcircle_2d, local_frame, min_angle_3d, orient, to_local
 
 
@@ -571,13 +571,7 @@ class Refiner:
             q = tri.surface(np.r_[uv[:, 0], uv[:, 0] + hu, uv[:, 0]], np.r_[uv[:, 1], uv[:, 1], uv[:, 1] + hv])
             R = q[:k]
             ju, jv = (q[k:2 * k] - R) / hu, (q[2 * k:] - R) / hv
-            r = R - E3s
-            a11, a12, a22 = (ju * ju).sum(1), (ju * jv).sum(1), (jv * jv).sum(1)
-            g1, g2 = (ju * r).sum(1), (jv * r).sum(1)
-            det = a11 * a22 - a12 * a12
-            ok = det > 0
-            det = np.where(ok, det, 1.0)
-            step = np.where(ok[:, None], -np.stack([(a22 * g1 - a12 * g2) / det, (a11 * g2 - a12 * g1) / det], 1), 0.0)
+            step = np.stack(gauss_newton_step(ju, jv, E3s - R), axis=1)  # eq. (7), all at once
             uv = uv + step
             if (np.abs(step) <= 1e-9 * (hi - lo)).all():
                 break

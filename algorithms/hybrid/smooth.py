@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .cdt import Triangulation
-from .chordal import chordal_errors
+from .chordal import chordal_errors, gauss_newton_step
 
 
 def _min_angles(T: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -90,14 +90,7 @@ def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None =
             for _step in range(2):  # Gauss-Newton on |R(u, v) − goal|²
                 q = surf(np.r_[x[:, 0] + hu, x[:, 0]], np.r_[x[:, 1], x[:, 1] + hv])
                 ru, rv = (q[:len(x)] - R) / hu, (q[len(x):] - R) / hv
-                r = goal - R
-                a11, a12, a22 = (ru * ru).sum(1), (ru * rv).sum(1), (rv * rv).sum(1)
-                g1, g2 = (ru * r).sum(1), (rv * r).sum(1)
-                det = a11 * a22 - a12 * a12
-                ok = det > 0
-                det = np.where(ok, det, 1.0)
-                x = x + np.where(ok[:, None], np.stack([(a22 * g1 - a12 * g2) / det,
-                                                        (a11 * g2 - a12 * g1) / det], axis=1), 0.0)
+                x = x + np.stack(gauss_newton_step(ru, rv, goal - R), axis=1)
                 x[:, 0] = np.clip(x[:, 0], a, b)
                 x[:, 1] = np.clip(x[:, 1], c, d)
                 R = surf(x[:, 0], x[:, 1])
