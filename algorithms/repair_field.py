@@ -161,12 +161,9 @@ def split_line(model: Icadm, frame: LoopFrame, params: FieldParams, *, cancel: C
     for i in order[:tries]:
         if cancel is not None and cancel():
             raise Cancelled()
-        try:
-            ln = trace_in_loop(ctx, frame, int(i), p, exclude_fraction=exclude_fraction, lc=lc)
-        except ZeroDivisionError:
-            # the fused tracer divides by a zero direction when a target coincides with the line's
-            # point (a hole walk that touches itself at one position): no usable line from here
-            continue
+        # a hole walk that touches itself at one position puts a target on the line's own point:
+        # the tracer then finds no force and ends the line as too weak
+        ln = trace_in_loop(ctx, frame, int(i), p, exclude_fraction=exclude_fraction, lc=lc)
         if not ln.arrived or int(ln.end_vertex) not in pos:
             continue
         j = pos[int(ln.end_vertex)]

@@ -27,11 +27,11 @@ from .metrics import project
 from .objects import FRepObject
 
 
-def _edge_faces(faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+def _edge_faces(faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64],
+                                                  NDArray[np.int64]]:
     """Interior edges as (E, 2) vertex pairs (a, b) with their two faces (E, 2) and the local
-    index of a in the first face, such that face[0] runs a -> b."""
+    index of a in the first face, such that face[0] runs a -> b; and every edge (sorted pairs)."""
     et = edge_table(faces)
-    m = len(faces)
     he = et.halfedge_edge  # half-edge h = 3 f + k runs faces[f, k] -> faces[f, (k + 1) % 3]
     order = np.argsort(he, kind="stable")
     hs = he[order]
@@ -42,8 +42,7 @@ def _edge_faces(faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np
     f2 = h2 // 3
     a = faces[f1, k1]
     b = faces[f1, (k1 + 1) % 3]
-    assert m == 0 or len(a) == len(f2)
-    return np.stack([a, b], axis=1), np.stack([f1, f2], axis=1), k1
+    return np.stack([a, b], axis=1), np.stack([f1, f2], axis=1), k1, et.edges
 
 
 def _unit_normals(p: NDArray[np.float64], tri: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -76,14 +75,14 @@ def valence_flips(vertices: NDArray[np.float64], faces: NDArray[np.int64], *, ma
     n = len(p)
     total = 0
     for _ in range(max_rounds):
-        ab, ff, k1 = _edge_faces(F)
+        ab, ff, k1, edges = _edge_faces(F)
         if not len(ab):
             break
         a, b = ab[:, 0], ab[:, 1]
         c = F[ff[:, 0], (k1 + 2) % 3]
         f2 = F[ff[:, 1]]
         d = f2.sum(axis=1) - a - b  # the vertex of the second face that is not a or b
-        val = np.bincount(edge_table(F).edges.ravel(), minlength=n).astype(np.int64)
+        val = np.bincount(edges.ravel(), minlength=n).astype(np.int64)
         before = (val[a] - 6) ** 2 + (val[b] - 6) ** 2 + (val[c] - 6) ** 2 + (val[d] - 6) ** 2
         after = (val[a] - 7) ** 2 + (val[b] - 7) ** 2 + (val[c] - 5) ** 2 + (val[d] - 5) ** 2
         gain = before - after
@@ -91,8 +90,7 @@ def valence_flips(vertices: NDArray[np.float64], faces: NDArray[np.int64], *, ma
         if not ok.any():
             break
         # the new edge cd must not exist already
-        keys = np.sort(edge_table(F).edges, axis=1)
-        existing = keys[:, 0] * n + keys[:, 1]
+        existing = edges[:, 0] * n + edges[:, 1]
         cd = np.sort(np.stack([c, d], axis=1), axis=1)
         ok &= ~np.isin(cd[:, 0] * n + cd[:, 1], existing)
         # geometry: the new faces (a, d, c) and (d, b, c) turn little from the old and are not worse
