@@ -1,6 +1,7 @@
 """The finishing passes after Stage III: edge flips (flips.py) and smoothing on the surface (smooth.py)."""
 
 import numpy as np
+import pytest
 
 from algorithms.hybrid import surfaces as S
 from algorithms.hybrid.border import CURVE
@@ -82,3 +83,42 @@ def test_min_angles_helper_matches_metrics():
     V = rng.normal(size=(50, 3))
     F = np.array([[i, (i + 7) % 50, (i + 19) % 50] for i in range(50)])
     assert np.allclose(_min_angles(V[F]), min_angles(V, F), atol=1e-9)
+
+
+def _off_centre_hexagon(centre):
+    tri = plane()
+    ring = [(np.cos(a), np.sin(a)) for a in np.linspace(0, 2 * np.pi, 7)[:-1]]
+    build(tri, ring + [centre], [[6, i, (i + 1) % 6] for i in range(6)])
+    for i in range(6):
+        tri._add_segment(i, (i + 1) % 6, CURVE)
+    return tri
+
+
+def test_odt_smoothing_moves_to_the_area_weighted_mean_of_circumcentres():
+    tri = _off_centre_hexagon((0.3, -0.2))
+    P = np.array(tri.p3)
+    # the ODT point of the fan, by hand: circumcentres of the six triangles weighted by their areas
+    cc, w = [], []
+    for i in range(6):
+        A, B, C = P[6], P[i], P[(i + 1) % 6]
+        M = 2 * np.array([B[:2] - A[:2], C[:2] - A[:2]])
+        rhs = np.array([B[:2] @ B[:2] - A[:2] @ A[:2], C[:2] @ C[:2] - A[:2] @ A[:2]])
+        cc.append(np.linalg.solve(M, rhs))
+        (x1, y1), (x2, y2) = B[:2] - A[:2], C[:2] - A[:2]
+        w.append(0.5 * abs(x1 * y2 - y1 * x2))
+    odt = (np.array(w)[:, None] * np.array(cc)).sum(0) / sum(w)
+    before = min_angles(P, tri.faces()).min()
+    assert smooth(tri, passes=1, target="odt") == 1
+    assert np.allclose(tri.p3[6][:2], odt, atol=1e-6)
+    assert min_angles(np.array(tri.p3), tri.faces()).min() > before
+
+
+def test_flips_keep_max_edge():
+    # (smoothing's max_edge: tests/test_hybrid_coarsen.py, through the mesher)
+    # a thin quad whose better diagonal is longer than max_edge is not flipped
+    uv = [(0, 0), (2, 0), (1, -0.3), (1, 0.3)]
+    tri = build(plane(), uv, [[0, 2, 1], [1, 3, 0]])
+    assert flip_pass(tri, max_edge=0.5) == 0
+    assert flip_pass(tri, max_edge=0.7) == 1
+    with pytest.raises(ValueError, match="target"):
+        smooth(tri, target="centroid")

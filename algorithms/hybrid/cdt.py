@@ -252,6 +252,45 @@ class Triangulation:
         self.vtri[q] = t2
         return t, t2
 
+    def snapshot(self) -> tuple:
+        """The mutable state (vertices, triangles, neighbours), to undo a pass with restore()."""
+        return (list(self.uv), list(self.p3), [list(t) for t in self.tv], [list(t) for t in self.tn],
+                list(self.alive), list(self.vtri), self.n_alive)
+
+    def restore(self, state: tuple) -> None:
+        uv, p3, tv, tn, alive, vtri, n_alive = state
+        self.uv, self.p3, self.tv, self.tn = list(uv), list(p3), [list(t) for t in tv], [list(t) for t in tn]
+        self.alive, self.vtri, self.n_alive = list(alive), list(vtri), n_alive
+
+    def collapse(self, v: int, w: int) -> list[int]:
+        """Remove interior vertex v by moving it onto its neighbour w (half-edge collapse): the two
+        triangles on edge (v, w) die, the rest of v's fan take w instead of v. The caller has checked
+        that v is not on a border segment and that the new fan is counter-clockwise in (u, v) (then
+        the star of v is star-shaped from w and the result is a valid triangulation). Returns the
+        triangles that now hold w instead of v."""
+        fan = self._fan(v)
+        dead = [t for t in fan if w in self.tv[t]]
+        if len(dead) != 2:
+            raise ValueError(f"collapse: {v} and {w} are not interior neighbours")
+        for t in dead:
+            tv, tn = self.tv[t], self.tn[t]
+            i, j = tv.index(v), tv.index(w)
+            x = tv[3 - i - j]
+            a, b = tn[j], tn[i]  # across (v, x): a fan triangle of v; across (w, x): outside the fan
+            self._repoint(a, t, b)
+            self._repoint(b, t, a)
+            self.alive[t] = False
+            self.n_alive -= 1
+            self.vtri[x] = a
+        kept = [t for t in fan if t not in dead]
+        for t in kept:
+            tv = self.tv[t]
+            tv[tv.index(v)] = w
+        self.vtri[w] = kept[0]
+        self.vtri[v] = -1
+        self._touched(*kept)
+        return kept
+
     # ---- fans and edges ----------------------------------------------------------------------------
     def _fan(self, v: int) -> list[int]:
         """The triangles around vertex v (in order around it; open fans at the border)."""

@@ -48,3 +48,18 @@ def sample_errors(surface, T3: NDArray[np.float64], T2: NDArray[np.float64]) -> 
     R2 = surface(np.clip(u + du, a, b), np.clip(v + dv, c, d))
     dist = np.minimum(np.sqrt(((R2 - S3) ** 2).sum(-1)), np.sqrt((r * r).sum(-1)))
     return dist
+
+
+def chord_arc_ratios(surface, uv: NDArray[np.float64], ends: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(K,) chord / arc of edges with parameters uv (K, 2, 2) and end points ends (K, 2, 3): the arc
+    is the polyline through the surface at 1/4, 1/2, 3/4 of the parameter segment (one surface call);
+    1 for a zero-length arc. The curvature criterion in its ratio form (spec/hybrid.md §4)."""
+    s = np.array([0.25, 0.5, 0.75])[None, :, None]
+    mid = uv[:, :1] + s * (uv[:, 1:] - uv[:, :1])  # (K, 3, 2)
+    q = surface(mid[..., 0], mid[..., 1])  # (K, 3, 3)
+    pts = np.concatenate([ends[:, :1], q, ends[:, 1:]], axis=1)
+    seg = np.diff(pts, axis=1)
+    arc = np.sqrt((seg * seg).sum(-1)).sum(-1)
+    d = ends[:, 1] - ends[:, 0]
+    chord = np.sqrt((d * d).sum(-1))
+    return np.where(arc > 0, chord / np.where(arc > 0, arc, 1.0), 1.0)

@@ -17,8 +17,9 @@ from .chordal import chordal_errors
 from .smooth import _min_angles
 
 
-def flip_pass(tri: Triangulation, *, max_deviation: float | None = None, gain: float = 0.5) -> int:
-    """One pass; returns the number of flips."""
+def flip_pass(tri: Triangulation, *, max_deviation: float | None = None, gain: float = 0.5,
+              max_edge: float | None = None) -> int:
+    """One pass; returns the number of flips. max_edge: no flip makes an edge longer than this."""
     T, K = [], []
     for t, (al, nb) in enumerate(zip(tri.alive, tri.tn)):
         if not al:
@@ -53,7 +54,10 @@ def flip_pass(tri: Triangulation, *, max_deviation: float | None = None, gain: f
     old = np.minimum(_min_angles(P3[np.stack([r, p, q], 1)]), _min_angles(P3[np.stack([s, q, p], 1)]))
     A, B = np.stack([r, p, s], 1), np.stack([s, q, r], 1)
     new = np.minimum(_min_angles(P3[A]), _min_angles(P3[B]))
-    cand = np.flatnonzero(free & convex & (new > old + gain))
+    ok = free & convex & (new > old + gain)
+    if max_edge is not None:  # the new diagonal (r, s)
+        ok &= np.sqrt(((P3[r] - P3[s]) ** 2).sum(axis=1)) <= max_edge
+    cand = np.flatnonzero(ok)
     if not len(cand):
         return 0
     if max_deviation is not None:

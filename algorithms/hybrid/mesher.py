@@ -13,10 +13,14 @@ from ..mesh import Mesh
 from ..metrics import AngleStats, TopologySummary, angle_histogram, angle_stats, min_angles, topology, triangle_angles
 from .border import CURVE, Border, build_border
 from .cdt import Triangulation
+from .coarsen import coarsen_pass
 from .flips import flip_pass
 from .model import HybridModel
 from .refine import RefineParams, Refiner, RefineStats
 from .smooth import smooth as smooth_pass
+
+COARSEN_PASSES = 8  # at most; each followed by a flip and a smoothing pass
+MEDIAN_GAIN = 0.05  # degrees: finishing passes beyond `smooth` go on while they raise the median this much
 
 
 @dataclass(frozen=True)
@@ -26,9 +30,17 @@ class HybridParams:
     cells: background grid cells along the longer direction (Stage I); delta: short-edge merge
     length as a fraction of the 3D cell diagonal (§2 step 3, default 40 %); corner_angle: trim
     corners sharper than this (degrees) are excepted from the angle bound and reported; the rest
-    are the Stage III parameters (:class:`RefineParams`); smooth: finishing passes, each a pass of
-    edge flips (flips.py) then one of smart Laplacian smoothing (smooth.py) (choice: both keep the
-    angle and chordal bounds and raise the median)."""
+    are the Stage III parameters (:class:`RefineParams`); smooth: finishing passes (up to three
+    times as many while they still raise the median minimum angle), each a pass of edge flips
+    (flips.py) then one of smart smoothing (smooth.py), towards the ODT point and the Laplacian point
+    in turn (choice: both keep the angle and chordal bounds and raise the median);
+    coarsen_angle: after them, passes of half-edge and midpoint collapses (coarsen.py) remove the
+    vertices the Stage III criteria do not need, keeping every bound, each new triangle's smallest
+    angle at least this (degrees, >= min_angle; above it keeps the median min angle near 50: 36
+    measured on the interstage cone; 0 disables);
+    median_floor: collapses keep the median of the triangles' minimum angles above this (degrees:
+    at most half the triangles below it), and a pass that leaves it below after smoothing is undone
+    and ends the coarsening."""
 
     min_angle: float = 30.0
     max_edge: float | None = None
@@ -42,6 +54,8 @@ class HybridParams:
     max_deviation: float | None = None
     border_deviation: float | None = None
     smooth: int = 4
+    coarsen_angle: float = 36.0
+    median_floor: float = 48.5
     refine: bool = True
 
     def __post_init__(self) -> None:
@@ -52,6 +66,8 @@ class HybridParams:
             raise ValueError(f"delta: must be in [0, 1), got {self.delta}")
         if self.smooth < 0:
             raise ValueError(f"smooth: the number of smoothing passes must be >= 0, got {self.smooth}")
+        if self.coarsen_angle and not self.min_angle <= self.coarsen_angle < 60:
+            raise ValueError(f"coarsen_angle: must be 0 (off) or in [min_angle, 60), got {self.coarsen_angle}")
         if not 0 < self.corner_angle <= 180:
             raise ValueError(f"corner_angle: must be in (0, 180], got {self.corner_angle}")
 
@@ -93,6 +109,7 @@ class HybridResult:
     refine_stats: RefineStats | None = None
     smoothed_moves: int = 0
     flips: int = 0
+    collapses: int = 0
 
     @property
     def stats_before(self) -> AngleStats:
@@ -133,6 +150,7 @@ class HybridResult:
                 "border_splits": rs.segment_splits if rs else 0,
                 "smoothing_moves": self.smoothed_moves,
                 "finishing_flips": self.flips,
+                "collapses": self.collapses,
             },
             "angles_before": self.stats_before.as_dict(),
             "angles_after": self.stats_after.as_dict(),
@@ -219,13 +237,55 @@ def mesh_hybrid(model: HybridModel, params: HybridParams | None = None) -> Hybri
         stats = ref.run()  # Stage III
     times["stage3_refine"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    moved = flipped = 0
+    moved = flipped = collapsed = 0
+    passes = 0
+
+    def finish(only: NDArray[np.bool_] | None = None) -> None:
+        """One flip pass, one smoothing pass (ODT and Laplacian targets in turn); only: the vertices
+        that may move."""
+        nonlocal moved, flipped, passes
+        flipped += flip_pass(tri, max_deviation=p.max_deviation, max_edge=p.max_edge)
+        moved += smooth_pass(tri, passes=1, max_deviation=p.max_deviation, guard=p.min_angle + 0.25,
+                             max_edge=p.max_edge, target="odt" if passes % 2 == 0 else "laplace", only=only)
+        passes += 1
+
+    def median() -> float:
+        return float(np.median(min_angles(np.array(tri.p3), tri.faces())))
+
     if p.refine and p.smooth:  # finishing passes: flips that raise the min angle, then smoothing, in turn
         for _ in range(p.smooth):
-            flipped += flip_pass(tri, max_deviation=p.max_deviation)
-            moved += smooth_pass(tri, passes=1, max_deviation=p.max_deviation, guard=p.min_angle + 0.25)
-        flipped += flip_pass(tri, max_deviation=p.max_deviation)
+            finish()
+        m = median()
+        for _ in range(2 * p.smooth):  # more while they still raise the median (coarse meshes, mostly)
+            finish()
+            m, m0 = median(), m
+            if m < m0 + MEDIAN_GAIN:
+                break
     times["smooth"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    if p.refine and p.coarsen_angle:
+        active = None
+        for _ in range(COARSEN_PASSES):  # until a pass removes under 1 % of the triangles
+            undo = tri.snapshot(), moved, flipped
+            c, changed = coarsen_pass(tri, min_angle=p.coarsen_angle, max_deviation=p.max_deviation,
+                                      max_edge=p.max_edge, chord_arc=p.chord_arc, only=active,
+                                      median_floor=p.median_floor)
+            # the next pass looks only where triangles changed: this one's collapses and the smoothing
+            # around them (one ring further)
+            f = tri.faces()
+            active = changed.copy()
+            active[f[changed[f].any(axis=1)].ravel()] = True
+            finish(only=active)
+            if median() < p.median_floor:
+                tri.restore(undo[0])  # this pass cost too much of the median
+                moved, flipped = undo[1:]
+                break
+            collapsed += c
+            if c < 0.005 * tri.n_alive:
+                break
+    if p.refine and (p.smooth or p.coarsen_angle):
+        flipped += flip_pass(tri, max_deviation=p.max_deviation, max_edge=p.max_edge)
+    times["coarsen"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     f = tri.faces()
@@ -259,4 +319,4 @@ def mesh_hybrid(model: HybridModel, params: HybridParams | None = None) -> Hybri
     times["output"] = time.perf_counter() - t0
     times["total"] = sum(times.values())
     return HybridResult(model, p, border, uv0, p30, f0, uv, pts, faces, mesh, weld, before, after,
-                        corner_tris, cv, bv, max_f, max_d, times, stats, moved, flipped)
+                        corner_tris, cv, bv, max_f, max_d, times, stats, moved, flipped, collapsed)

@@ -19,7 +19,7 @@ import numpy as np
 
 from .border import CURVE
 from .cdt import BLOCKED, Triangulation
-from .chordal import chordal_errors, gauss_newton_step
+from .chordal import chord_arc_ratios, chordal_errors, gauss_newton_step
 from .incircle import circumcentre_3d, circumcircle_2d, local_frame, min_angle_3d, orient, to_local
 
 
@@ -122,17 +122,8 @@ class Refiner:
         the parameter segment (one vectorised surface call for all the edges)."""
         tri = self.tri
         uv = np.array([[tri.uv[a], tri.uv[b]] for a, b in keys])  # (K, 2, 2)
-        s = np.array([0.25, 0.5, 0.75])[None, :, None]
-        mid = uv[:, :1] + s * (uv[:, 1:] - uv[:, :1])  # (K, 3, 2)
-        q = tri.surface(mid[..., 0], mid[..., 1])  # (K, 3, 3)
         ends = np.array([[tri.p3[a], tri.p3[b]] for a, b in keys])
-        pts = np.concatenate([ends[:, :1], q, ends[:, 1:]], axis=1)
-        seg = np.diff(pts, axis=1)
-        arc = np.sqrt((seg * seg).sum(-1)).sum(-1)
-        d = ends[:, 1] - ends[:, 0]
-        chord = np.sqrt((d * d).sum(-1))
-        ratio = np.where(arc > 0, chord / np.where(arc > 0, arc, 1.0), 1.0)
-        for k, r in zip(keys, ratio.tolist()):
+        for k, r in zip(keys, chord_arc_ratios(tri.surface, uv, ends).tolist()):
             self.arc_cache[k] = r
 
     def _chordal(self, ts: list[int]) -> None:

@@ -1,6 +1,9 @@
-"""A finishing pass after Stage III (choice, not in the paper): smart Laplacian smoothing on the surface.
+"""A finishing pass after Stage III (choice, not in the paper): smart smoothing on the surface.
 
-Each interior vertex is moved towards the 3D mean of its neighbours: the target is found in (u, v)
+Each interior vertex is moved towards a target point in space: the 3D mean of its neighbours
+(Laplacian), or the area-weighted mean of its triangles' 3D circumcentres (the optimal Delaunay
+triangulation update of Chen and Xu, ODT), which evens out triangle shapes where Laplacian smoothing
+stalls. The target is found in (u, v)
 by Gauss-Newton on |R(u, v) − mean|² (two steps from the vertex's own parameters, the Jacobian by
 finite differences), so a non-uniform parameterisation does not pull the vertex off the middle of
 its neighbours in space. The move is kept only if every triangle around the vertex stays
@@ -36,6 +39,12 @@ def _min_angles(T: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
+def _longest(T: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(K, 3, 3) triangles → (K,) longest 3D edge."""
+    e = T[:, [1, 2, 0]] - T
+    return np.sqrt(np.einsum("kij,kij->ki", e, e).max(axis=1))
+
+
 def _colours(n: int, edges: NDArray[np.int64], movable: NDArray[np.bool_]) -> list[NDArray[np.int64]]:
     """Greedy colouring of the movable vertices: lists of independent vertex sets."""
     nb: list[list[int]] = [[] for _ in range(n)]
@@ -53,8 +62,13 @@ def _colours(n: int, edges: NDArray[np.int64], movable: NDArray[np.bool_]) -> li
     return [np.flatnonzero(col == c) for c in range(col.max() + 1)] if (col >= 0).any() else []
 
 
-def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None = None, guard: float = 30.0) -> int:
-    """Returns the number of accepted moves. guard: the angle bound kept (degrees)."""
+def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None = None, guard: float = 30.0,
+           max_edge: float | None = None, target: str = "laplace", only: NDArray[np.bool_] | None = None) -> int:
+    """Returns the number of accepted moves. guard: the angle bound kept (degrees); max_edge: no move
+    makes a 3D edge longer than this (or longer than it was, where it was over already); target:
+    "laplace" or "odt"; only: (optional mask) the vertices that may move."""
+    if target not in ("laplace", "odt"):
+        raise ValueError(f"target: 'laplace' or 'odt', got {target!r}")
     faces = tri.faces()
     if not len(faces) or passes <= 0:
         return 0
@@ -64,8 +78,11 @@ def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None =
     movable = np.zeros(n, dtype=bool)
     movable[np.unique(faces)] = True
     movable[tri.border_vertices()] = False
+    if only is not None:
+        movable &= only[:n]
     e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    edges = np.unique(e, axis=0)
+    key = np.unique(e[:, 0] * n + e[:, 1])  # the edges, once each
+    edges = np.stack([key // n, key % n], axis=1)
     deg = np.bincount(edges.ravel(), minlength=n).astype(np.float64)
     # incidence: for each (triangle, corner) pair, sorted by vertex
     tri_of = np.repeat(np.arange(len(faces)), 3)
@@ -80,11 +97,28 @@ def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None =
         for vs in sets:
             if not len(vs):
                 continue
-            # the 3D mean of the neighbours
-            s3 = np.zeros((n, 3))
-            np.add.at(s3, edges[:, 0], p3[edges[:, 1]])
-            np.add.at(s3, edges[:, 1], p3[edges[:, 0]])
-            goal = s3[vs] / deg[vs, None]
+            # the triangles around the set, before the move
+            sel = np.isin(vert, vs)
+            ft, fc, fv = tri_of[sel], corner[sel], vert[sel]
+            pos = np.searchsorted(vs, fv)  # vs is sorted (flatnonzero)
+            F = faces[ft]
+            T3o, T2o = p3[F], uv[F]
+            if target == "odt":  # the area-weighted mean of the fan's 3D circumcentres
+                A, B, C = T3o[:, 0], T3o[:, 1], T3o[:, 2]
+                ea, eb = A - C, B - C
+                nrm = np.cross(ea, eb)
+                n2 = np.maximum((nrm * nrm).sum(1), 1e-300)
+                la, lb = (ea * ea).sum(1)[:, None], (eb * eb).sum(1)[:, None]
+                cc = C + np.cross(la * eb - lb * ea, nrm) / (2 * n2[:, None])
+                w = np.sqrt(n2)
+                goal = np.zeros((len(vs), 3))
+                np.add.at(goal, pos, w[:, None] * cc)
+                goal /= np.maximum(np.bincount(pos, w, minlength=len(vs)), 1e-300)[:, None]
+            else:  # the 3D mean of the neighbours
+                s3 = np.zeros((n, 3))
+                np.add.at(s3, edges[:, 0], p3[edges[:, 1]])
+                np.add.at(s3, edges[:, 1], p3[edges[:, 0]])
+                goal = s3[vs] / deg[vs, None]
             x = uv[vs].copy()
             R = p3[vs].copy()
             for _step in range(2):  # Gauss-Newton on |R(u, v) − goal|²
@@ -94,12 +128,6 @@ def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None =
                 x[:, 0] = np.clip(x[:, 0], a, b)
                 x[:, 1] = np.clip(x[:, 1], c, d)
                 R = surf(x[:, 0], x[:, 1])
-            # the triangles around the set, old and new
-            sel = np.isin(vert, vs)
-            ft, fc, fv = tri_of[sel], corner[sel], vert[sel]
-            pos = np.searchsorted(vs, fv)  # vs is sorted (flatnonzero)
-            F = faces[ft]
-            T3o, T2o = p3[F], uv[F]
             T3n, T2n = T3o.copy(), T2o.copy()
             rows = np.arange(len(F))
             T3n[rows, fc] = R[pos]
@@ -119,6 +147,12 @@ def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None =
             # the fan's smallest angle may not fall below the bound (nor below its old value if it was
             # under it already), and its mean minimum angle must improve
             accept = (new_min >= np.minimum(old_min, guard)) & (new_mean > old_mean)
+            if max_edge is not None:
+                lo, ln = _longest(T3o), _longest(T3n)
+                old_l, new_l = np.zeros(len(vs)), np.zeros(len(vs))
+                np.maximum.at(old_l, pos, lo)
+                np.maximum.at(new_l, pos, ln)
+                accept &= new_l <= np.maximum(max_edge, old_l)
             if max_deviation is not None and accept.any():
                 # the fans' chordal errors after the move; before it only where they exceed the tolerance
                 fsel = accept[pos]
