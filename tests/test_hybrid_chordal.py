@@ -131,3 +131,21 @@ def test_cli_max_deviation(tmp_path):
     assert d["params"]["max_deviation"] == 0.01 and d["params"]["border_deviation"] is None
     assert d["angles_after_excluding_corners"]["min"] >= 30
     assert 150 < d["counts"]["triangles_final"] < 1500
+
+
+def test_cli_coarsen_angle(tmp_path):
+    import json
+
+    from algorithms.cli import main
+
+    counts = {}
+    for a in ("0", "36"):
+        out, rep = tmp_path / f"m{a}.ply", tmp_path / f"r{a}.json"
+        assert main(["hybrid", "--demo", "bezier-hole", "-o", str(out), "--max-deviation", "0.002",
+                     "--chord-arc", "0", "--coarsen-angle", a, "--report", str(rep)]) == 0
+        d = json.loads(rep.read_text())
+        assert d["params"]["coarsen_angle"] == float(a)
+        assert d["angles_after_excluding_corners"]["min"] >= 30
+        counts[a] = (d["counts"]["triangles_final"], d["counts"]["collapses"])
+    assert counts["0"][1] == 0 and counts["36"][1] > 0
+    assert counts["36"][0] < counts["0"][0]

@@ -77,6 +77,18 @@ def test_hybrid_threshold_moves_the_histogram(qtbot):
     qtbot.waitUntil(lambda: w.current is not coarse and not w.busy, timeout=60_000)
     assert w.current.params.max_deviation == 0.0005
     assert len(w.current.result.faces) > len(coarse.result.faces)
+
+    # the user types 0 in the coarsen-angle box: coarsening off, the refined mesh as it is (more triangles)
+    coarsened = w.current
+    assert coarsened.params.coarsen_angle == 36.0 and coarsened.result.collapses > 0
+    edit = w.coarsen_spin.lineEdit()
+    edit.selectAll()
+    qtbot.keyClicks(edit, "0")
+    qtbot.keyClick(edit, Qt.Key_Return)
+    qtbot.waitUntil(lambda: w.current is not coarsened and not w.busy, timeout=60_000)
+    assert w.coarsen_spin.text() == "off"
+    assert w.current.params.coarsen_angle == 0.0 and w.current.result.collapses == 0
+    assert len(w.current.result.faces) > len(coarsened.result.faces)
     _close(qtbot, w)
 
 

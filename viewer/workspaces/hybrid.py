@@ -232,6 +232,18 @@ class HybridWorkspace(QWidget):
                                        "farther than this from the surface (model units; 0: the spec's setting)")
         self.deviation_spin.valueChanged.connect(self._params_changed)
         form.addRow("Max deviation", self.deviation_spin)
+        self.coarsen_spin = QDoubleSpinBox()
+        self.coarsen_spin.setRange(0.0, 59.0)
+        self.coarsen_spin.setDecimals(1)
+        self.coarsen_spin.setSingleStep(1.0)
+        self.coarsen_spin.setSuffix(" °")
+        self.coarsen_spin.setSpecialValueText("off")
+        self.coarsen_spin.setValue(HybridParams.coarsen_angle)
+        self.coarsen_spin.setToolTip("Coarsening after refinement: remove the vertices the size criteria do not need "
+                                     "while every new triangle keeps at least this smallest angle (at least the "
+                                     "min-angle threshold; off: the refined mesh as it is)")
+        self.coarsen_spin.valueChanged.connect(self._params_changed)
+        form.addRow("Coarsen angle", self.coarsen_spin)
 
         self.stage_combo = QComboBox()
         self.stage_combo.addItem("after refinement (Stage III)", "after")
@@ -291,7 +303,7 @@ class HybridWorkspace(QWidget):
         p = spec.params()
         for wdg, val in ((self.threshold_spin, p.min_angle), (self.max_edge_spin, p.max_edge or 0.0),
                          (self.cells_spin, p.cells), (self.chord_spin, p.chord_arc),
-                         (self.deviation_spin, p.max_deviation or 0.0),
+                         (self.deviation_spin, p.max_deviation or 0.0), (self.coarsen_spin, p.coarsen_angle),
                          (self.threshold_slider, int(round(p.min_angle)))):
             wdg.blockSignals(True)
             wdg.setValue(val)
@@ -310,9 +322,11 @@ class HybridWorkspace(QWidget):
     def params(self) -> HybridParams:
         assert self.spec is not None
         me = self.max_edge_spin.value()
-        return self.spec.params(min_angle=self.threshold_spin.value(), max_edge=me if me > 0 else None,
+        a, ca = self.threshold_spin.value(), self.coarsen_spin.value()
+        return self.spec.params(min_angle=a, max_edge=me if me > 0 else None,
                                 cells=self.cells_spin.value(), chord_arc=self.chord_spin.value(),
-                                max_deviation=self.deviation_spin.value() or None)
+                                max_deviation=self.deviation_spin.value() or None,
+                                coarsen_angle=max(ca, a) if ca > 0 else 0.0)
 
     def _threshold_changed(self, value: float) -> None:
         self.threshold_slider.blockSignals(True)
