@@ -279,7 +279,7 @@ def main(argv=None) -> int:
                 ratios.append([name, target, variant, n]
                               + [(same[n2][1] if n2 in same else cmax) / c for c, _, n2 in gm]
                               + [dt / t for _, t, _ in gm]
-                              + ["; ".join(f"{k} at Gmsh's {k}" for k in same) or "-"])
+                              + [", ".join(f"{k} triangles" for k in same) or "-"])
             flush()
     if args.json:
         with open(args.json, "w") as fh:
