@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,12 +50,16 @@ class Targets:
     island: NDArray[np.int64]
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "_tree", cKDTree(self.points) if len(self.points) else None)
         object.__setattr__(self, "_rmax", float(self.reach.max()) if len(self.reach) else 0.0)
+
+    @cached_property
+    def _tree(self) -> cKDTree | None:
+        """Built on the first hit() (the Python tracer's); the fused tracer tests the points itself."""
+        return cKDTree(self.points) if len(self.points) else None
 
     def hit(self, x: Arr) -> int:
         """Index of the nearest target within its reach of x, or -1."""
-        tree = self._tree  # type: ignore[attr-defined]
+        tree = self._tree
         if tree is None:
             return -1
         dist, idx = tree.query(x, k=min(4, len(self.points)), distance_upper_bound=self._rmax)  # type: ignore
@@ -90,9 +95,9 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
     """
     x = np.asarray(start_point, dtype=np.float64).copy()
     if isinstance(avoid, cKDTree):
-        avoid_tree: cKDTree | None = avoid
+        avoid_pts: Arr = np.asarray(avoid.data)
     else:
-        avoid_tree = cKDTree(np.asarray(avoid).reshape(-1, 3)) if avoid is not None and len(avoid) else None
+        avoid_pts = np.asarray(avoid, dtype=np.float64).reshape(-1, 3) if avoid is not None else np.zeros((0, 3))
     tau0 = np.asarray(start_tangent, dtype=np.float64)
     s0 = field.sample(x, tau0, np.asarray(start_normal, dtype=np.float64))  # (16a)
     pts, nrm, frc, ten = [x.copy()], [s0.normal if s0.normal is not None else np.zeros(3)], [
@@ -110,7 +115,9 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
     f, n = s0.force, s0.normal
     if isinstance(field, Biaf) and len(field.field.sources):
         rec = (pts, nrm, frc, ten)
-        return _trace_fused(field, x, f, n, params, targets, step, avoid_tree, floor, cancel, rec, done)
+        return _trace_fused(field, x, f, n, params, targets, step, avoid_pts, floor, cancel, rec, done)
+    # the Python loop (other fields): a k-d tree of the points to avoid
+    avoid_tree = avoid if isinstance(avoid, cKDTree) else (cKDTree(avoid_pts) if len(avoid_pts) else None)
     dev = params.deviation * step
     offs = np.linspace(-1.0, 1.0, PC_SAMPLES)
     simple = params.tracer == "simple"
@@ -162,7 +169,7 @@ def trace(field: MissingSurfaceField, start_point: Arr, start_tangent: Arr, star
 
 
 def _trace_fused(field: Biaf, x: Arr, f: Arr, n: Arr, params: FieldParams, targets: Targets, step: float,
-                 avoid_tree: cKDTree | None, floor: float, cancel: Callable[[], bool] | None, rec: tuple,
+                 avoid_pts: Arr, floor: float, cancel: Callable[[], bool] | None, rec: tuple,
                  done: Callable[[str, int], ForceLine]) -> ForceLine:
     """The tracer's loop (simple or predictor-corrector) in numba (field/light_tracer.py) for the
     BIAF (light or full mode): the same steps as trace's Python loop, FUSED_CHUNK steps per call."""
@@ -171,7 +178,7 @@ def _trace_fused(field: Biaf, x: Arr, f: Arr, n: Arr, params: FieldParams, targe
     pts, nrm, frc, ten = rec
     state = np.array([x, f, n], dtype=np.float64)
     start = np.array(pts[0], dtype=np.float64)
-    avoid = np.ascontiguousarray(avoid_tree.data, dtype=np.float64) if avoid_tree is not None else np.zeros((0, 3))
+    avoid = np.ascontiguousarray(avoid_pts, dtype=np.float64)
     tg = np.ascontiguousarray(targets.points, dtype=np.float64)
     reach = np.ascontiguousarray(targets.reach, dtype=np.float64)
     chunk = min(FUSED_CHUNK, params.max_steps)
