@@ -28,6 +28,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--coarsen-angle", type=float, metavar="A",
                    help="after refinement, collapse the vertices the size criteria do not need while every new "
                         "triangle keeps at least this smallest angle (degrees, default 36; 0: no coarsening)")
+    p.add_argument("--no-seed", action="store_true",
+                   help="do not seed Stage III with the lattice along the rulings of cones and cylinders (it is "
+                        "used with --max-deviation where the parameter lines are straight lines of curvature)")
     p.add_argument("--max-triangles", type=int, metavar="N", help="stop refining beyond N triangles")
     p.add_argument("--cells", type=int, metavar="N", help="Stage I background grid cells along the longer side")
     p.add_argument("--report", metavar="R.json", help="write the JSON report")
@@ -74,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
     spec = load_spec(input_path(args))
     params = spec.params(min_angle=args.min_angle, max_edge=args.max_edge, chord_arc=args.chord_arc,
                          max_triangles=args.max_triangles, cells=args.cells, max_deviation=args.max_deviation,
-                         border_deviation=args.border_deviation, coarsen_angle=args.coarsen_angle)
+                         border_deviation=args.border_deviation, coarsen_angle=args.coarsen_angle,
+                         seed=False if args.no_seed else None)
     result = mesh_hybrid(spec.model, params)
     save_mesh(result.mesh, out, force=args.force)
     rep = result.report()
@@ -84,7 +88,8 @@ def run(args: argparse.Namespace) -> int:
         write_histogram(result, args.hist, force=args.force)
     s, t = result.stats_after, result.topology
     print(f"{spec.model.name}: {len(result.faces)} triangles ({rep['counts']['triangles_initial']} after Stage II, "
-          f"{2 * result.collapses} removed by coarsening), {len(result.mesh.vertices)} vertices in "
+          f"{result.seeded} vertices seeded, {2 * result.collapses} triangles removed by coarsening), "
+          f"{len(result.mesh.vertices)} vertices in "
           f"{rep['timings']['total']:.2f} s")
     print(f"min angle {s.min:.2f}° (before {result.stats_before.min:.2f}°), 1st percentile {s.p01:.2f}°, "
           f"median {s.median:.2f}°, below 30°: {100 * s.below_30:.2f} %, trim-corner exceptions "

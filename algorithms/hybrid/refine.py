@@ -16,11 +16,14 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .border import CURVE
 from .cdt import BLOCKED, Triangulation
 from .chordal import chord_arc_ratios, chordal_errors, gauss_newton_step
 from .incircle import circumcentre_3d, circumcircle_2d, local_frame, min_angle_3d, orient, to_local
+
+SEED_SPLITS = 0  # seeding: border edges encroached by a seed split up to this many times before it is skipped
 
 
 @dataclass(frozen=True)
@@ -91,6 +94,7 @@ class Refiner:
         self.counter = 0
         self.arc_cache: dict[tuple[int, int], float] = {}
         self.inserted = 0
+        self.seeded = 0
         self.seg_splits = 0
         self.skipped = 0
         self.target_cache: dict[tuple[int, int], tuple[tuple[float, float], bool]] = {}
@@ -521,6 +525,62 @@ class Refiner:
                 self.refine_triangle(t, sp)
         tri.on_new_triangle = None
         return RefineStats(self.inserted, self.seg_splits, self.skipped, hit, len(tri.off_curve))
+
+    def split_long_segments(self, limit: float, *, rounds: int = 30) -> int:
+        """Split border segments longer than limit in space at their midpoints on the border (the same
+        split as for encroachment), until none is (before seeding: a long segment's diametral ball
+        would keep the seeds far from it). Returns the number of splits."""
+        tri = self.tri
+        done = 0
+        for _ in range(rounds):
+            long = [(a, b) for _k, a, b in list(tri.seg.values()) if _d2(tri.p3[a], tri.p3[b]) > limit * limit]
+            if not long:
+                break
+            for a, b in long:
+                if tri.is_constrained(a, b) and self.split_segment(a, b):
+                    done += 1
+        return done
+
+    def seed(self, points: NDArray[np.float64]) -> int:
+        """Insert interior points before run() (seeding.py): Delaunay insertion with the 3D flip test,
+        each point located from the triangle of its nearest vertex; a point behind a border edge, on a
+        vertex or encroaching a border edge is skipped. Returns the number inserted."""
+        from scipy.spatial import cKDTree
+
+        tri = self.tri
+        if not len(points):
+            return 0
+        tri.flip_test = self.flip_test
+        P3 = tri.surface(points[:, 0], points[:, 1])
+        used = [v for v in range(len(tri.uv)) if tri.vtri[v] >= 0 and tri.alive[tri.vtri[v]]]
+        near = cKDTree(np.array([tri.uv[v] for v in used]))
+        _, idx = near.query(points)
+        done = 0
+        last = -1
+        for (u, v), X, k in zip(points.tolist(), P3.tolist(), idx.tolist()):
+            X = (X[0], X[1], X[2])
+            for _attempt in range(SEED_SPLITS + 1):
+                start = last if last >= 0 and tri.alive[last] else tri.vtri[used[k]]
+                if start < 0 or not tri.alive[start]:
+                    start = tri.any_alive()
+                t, status, _k = tri.locate((u, v), start, stop_at_segments=True)
+                if status == BLOCKED and start != tri.vtri[used[k]] and tri.alive[tri.vtri[used[k]]]:
+                    t, status, _k = tri.locate((u, v), tri.vtri[used[k]], stop_at_segments=True)
+                if status == BLOCKED or any(_d2(tri.p3[w], X) <= (1e-9 * self.size) ** 2 for w in tri.tv[t]):
+                    break
+                enc = self.encroached_by(t, X)
+                if enc:  # Ruppert's rule: the border edges the point encroaches are split first
+                    if _attempt < SEED_SPLITS:
+                        for p, q in enc:
+                            self.split_segment(p, q)
+                    continue
+                w = tri.add_vertex((u, v), X)
+                tri.insert(w, t)
+                last = tri.vtri[w]
+                done += 1
+                break
+        self.seeded += done
+        return done
 
     def _collect(self, ts: list[int]) -> None:
         self.pending.extend(ts)
