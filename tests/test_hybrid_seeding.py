@@ -64,3 +64,13 @@ def test_seeded_interstage_keeps_every_bound_with_fewer_triangles():
     others = np.setdiff1d(np.arange(len(r.faces)), r.corner_triangles)
     assert ang[others].min() >= 30.0 and np.median(ang) >= 50.0
     assert r.topology.boundary_loops == plain.topology.boundary_loops == 12
+
+
+def test_the_lattice_keeps_max_edge():
+    model = HybridModel("cyl", S.cylinder(2.0, 0.0, 3.0))
+    _, w_free = principal_lattice(model, 1e-3)
+    P, w = principal_lattice(model, 1e-3, max_edge=0.5 * w_free)
+    cols = np.unique(np.round(P[:, 1], 9))
+    rows = np.sort(P[np.isclose(P[:, 1], cols[0]), 0])
+    assert np.diff(rows).max() <= 0.5 * w_free * (1 + 1e-3)  # the column edge, the longest one
+    assert w < 0.5 * w_free

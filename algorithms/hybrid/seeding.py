@@ -53,7 +53,8 @@ def _forms(surface, u: NDArray[np.float64], v: NDArray[np.float64]):
 
 
 def principal_lattice(model: HybridModel, max_deviation: float, *, fill: float = FILL,
-                      base_angle: float = BASE_ANGLE, samples: int = 25) -> tuple[NDArray[np.float64], float]:
+                      base_angle: float = BASE_ANGLE, max_edge: float | None = None,
+                      samples: int = 25) -> tuple[NDArray[np.float64], float]:
     """(K, 2) parameter points of the aligned lattice inside the parameter rectangle (not yet filtered
     by the trim), and the largest column spacing in space; (0, 2) when the surface does not qualify."""
     s = model.surface
@@ -88,6 +89,9 @@ def principal_lattice(model: HybridModel, max_deviation: float, *, fill: float =
     # slanted edges' midpoints (kappa w^2 / 9 at the centroid): w = sqrt(fill 8 max_deviation / kappa),
     # the column step in c the smallest one over the columns' length (no triangle over the tolerance)
     w_t = np.sqrt(fill * 8.0 * max_deviation / kx.max(axis=1))
+    if max_edge is not None:  # the longest lattice edge (the column edge, or a slanted one) within it
+        cot = 1.0 / math.tan(math.radians(base_angle))
+        w_t = np.minimum(w_t, max_edge / max(2.0 * cot, math.sqrt(1.0 + cot * cot)))
     dc = float((w_t / speed_c).min())
     span = c1 - c0
     m = max(2, int(math.ceil(span / dc)))
@@ -118,13 +122,14 @@ def principal_lattice(model: HybridModel, max_deviation: float, *, fill: float =
 
 
 def seed_points(model: HybridModel, max_deviation: float, segments_uv: NDArray[np.float64] | None = None, *,
-                fill: float = FILL, base_angle: float = BASE_ANGLE) -> tuple[NDArray[np.float64], float]:
+                fill: float = FILL, base_angle: float = BASE_ANGLE, max_edge: float | None = None
+                ) -> tuple[NDArray[np.float64], float]:
     """The lattice points inside the trim (W > 0) and at least 0.75 of the spacing away (in space) from
     the border segments segments_uv (S, 2, 2) (sampled 16 times each): ((K, 2) in (u, v), the lattice's
     largest column spacing in space)."""
     from scipy.spatial import cKDTree
 
-    P, h = principal_lattice(model, max_deviation, fill=fill, base_angle=base_angle)
+    P, h = principal_lattice(model, max_deviation, fill=fill, base_angle=base_angle, max_edge=max_edge)
     if not len(P) or segments_uv is None:
         return P, h
     X = model.surface(P[:, 0], P[:, 1])
