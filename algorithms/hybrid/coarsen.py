@@ -31,6 +31,7 @@ from .cdt import Triangulation
 from .chordal import chord_arc_ratios, chordal_errors, gauss_newton_step
 from .smooth import _longest, _min_angles
 
+TRY_PER_VERTEX = 2  # admissible collapses (by angle) per vertex whose size criteria are assessed
 SLACK = 0.9  # a vertex is a candidate when its triangles use at most this share of a size bound
 
 
@@ -160,6 +161,16 @@ def coarsen_pass(tri: Triangulation, *, min_angle: float, max_deviation: float |
     new_min = np.full(nc, np.inf)
     np.minimum.at(new_min, owner, ang)
     ok = new_min >= np.minimum(min_angle, np.where(mid, np.minimum(fan_min[cv], fan_min[cw]), fan_min[cv]))
+    # the size criteria (surface calls) only for each vertex's TRY_PER_VERTEX best-shaped collapses
+    order = np.lexsort((-new_min, cv))
+    first = np.r_[0, np.flatnonzero(np.diff(cv[order])) + 1]
+    okr = ok[order]
+    # rank among the admissible ones: the admissible predecessors within the vertex's group
+    cum = np.cumsum(okr) - okr
+    grp_start = np.repeat(cum[first], np.diff(np.r_[first, nc]))
+    adm_rank = np.empty(nc, dtype=np.int64)
+    adm_rank[order] = cum - grp_start
+    ok &= adm_rank < TRY_PER_VERTEX
     slack = np.zeros(nc)
     if max_edge is not None:
         worst = np.zeros(nc)

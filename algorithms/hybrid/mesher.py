@@ -21,7 +21,7 @@ from .seeding import seed_points
 from .smooth import smooth as smooth_pass
 
 COARSEN_PASSES = 8  # at most; each followed by a flip and a smoothing pass
-MEDIAN_GAIN = 0.05  # degrees: finishing passes beyond `smooth` go on while they raise the median this much
+MEDIAN_GAIN = 0.2  # degrees: finishing passes beyond `smooth` go on while they raise the median this much
 
 
 @dataclass(frozen=True)
@@ -296,7 +296,7 @@ def mesh_hybrid(model: HybridModel, params: HybridParams | None = None) -> Hybri
                 moved, flipped = undo[1:]
                 break
             collapsed += c
-            if c < 0.005 * tri.n_alive:
+            if c < 0.02 * tri.n_alive:
                 break
     if p.refine and (p.smooth or p.coarsen_angle):
         flipped += flip_pass(tri, max_deviation=p.max_deviation, max_edge=p.max_edge)
