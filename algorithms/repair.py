@@ -70,6 +70,8 @@ class RepairParams:
             raise ValueError(f"parameter fairing={self.fairing!r}: must be U1, U2 or U3")
         if self.weight not in ("area", "length"):
             raise ValueError(f"parameter weight={self.weight!r}: must be 'area' or 'length'")
+        if self.fit not in ("apss", "none"):
+            raise ValueError(f"parameter fit={self.fit!r}: must be 'apss' or 'none'")
         if not (0 < self.crease_angle <= 180):
             raise ValueError(f"parameter crease_angle={self.crease_angle!r}: must be in (0, 180]")
         if not (0 <= self.smooth <= 100):
