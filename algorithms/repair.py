@@ -59,6 +59,7 @@ class RepairParams:
     neighbourhood_factor: float = 1.0  # same-neighbourhood radius = factor x L_c
     crease_angle: float = 40.0  # sharp input edges (dihedral above, degrees) are continued across holes; 180: off
     smooth: int = 3  # tangential relaxation steps of all new vertices after the final fairing (liepa-fair)
+    fit: str = "apss"  # after the fairing, new vertices move onto the APSS of the input (darning/apss.py); "none"
 
     def __post_init__(self) -> None:
         if self.tunnels not in TUNNELS:
@@ -69,6 +70,8 @@ class RepairParams:
             raise ValueError(f"parameter fairing={self.fairing!r}: must be U1, U2 or U3")
         if self.weight not in ("area", "length"):
             raise ValueError(f"parameter weight={self.weight!r}: must be 'area' or 'length'")
+        if self.fit not in ("apss", "none"):
+            raise ValueError(f"parameter fit={self.fit!r}: must be 'apss' or 'none'")
         if not (0 < self.crease_angle <= 180):
             raise ValueError(f"parameter crease_angle={self.crease_angle!r}: must be in (0, 180]")
         if not (0 <= self.smooth <= 100):
@@ -544,8 +547,15 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         from .darning.fair import tangential_relax
 
         # the fairing placed the vertices on a smooth surface but unevenly: even them out along it
-        V = tangential_relax(V, F[n_before:], np.setdiff1d(np.arange(n_input, len(V)), keep_still),
-                             iterations=params.smooth)
+        movable = np.setdiff1d(np.arange(n_input, len(V)), keep_still)
+        fit = None
+        if params.fit == "apss" and len(movable):  # thin parts: the fairing spans them flat; the APSS follows them
+            fit = _Surroundings(V, F, n_input, work.normals[0], spacing)
+            V, moved = fit.project(V, movable)
+            timings_note["fairing"] += " + APSS"
+        V = tangential_relax(V, F[n_before:], movable, iterations=params.smooth)
+        if fit is not None and len(moved):  # relaxed along the curved surface's tangent planes: back onto it
+            V, _ = fit.project(V, moved)
         fixed = F[:n_before]
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
         patch, _ = relax(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None)
@@ -747,6 +757,31 @@ def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operat
         if plausible(out[free], V[free]):  # finite and near the unfaired patches
             return out, f"{op} {w}"
     return V, "none (every fairing system was singular)"
+
+
+class _Surroundings:
+    """The APSS of the input vertices that faces use, with their normals (darning/apss.py): new
+    vertices projected onto it follow the surroundings where the fairing spanned a thin part flat."""
+
+    def __init__(self, V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, normals: NDArray[np.float64],
+                 spacing: float) -> None:
+        from scipy.spatial import cKDTree
+
+        used = np.zeros(n_input, dtype=bool)
+        used[F[(F < n_input).all(axis=1)].ravel()] = True
+        self.points = V[:n_input][used]
+        self.normals = normals[:n_input][used]
+        self.tree = cKDTree(self.points)
+        self.spacing = spacing
+
+    def project(self, V: NDArray[np.float64],
+                which: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """(V with the vertices ``which`` projected, the ones that moved)."""
+        from .darning.apss import project
+
+        out = V.copy()
+        out[which] = project(V[which], self.points, self.normals, spacing=self.spacing, tree=self.tree)
+        return out, which[np.any(out[which] != V[which], axis=1)]
 
 
 def _class_found(n_islands: int, n_loops: int, tunnel: bool) -> str:

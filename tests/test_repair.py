@@ -103,6 +103,8 @@ def test_params_validation():
         RepairParams(darning="glue")
     with pytest.raises(ValueError, match="parameter tunnels="):
         RepairParams(tunnels="maybe")
+    with pytest.raises(ValueError, match="parameter fit="):
+        RepairParams(fit="rbf")
 
 
 def test_cli_repair_report_and_no_overwrite(tmp_path, capsys):
