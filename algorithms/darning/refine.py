@@ -204,3 +204,308 @@ def _split_obtuse(p: NDArray[np.float64], f: NDArray[np.int64], lab: NDArray[np.
     out = np.vstack([out, np.stack([m, b, c], 1), np.stack([m, a, d], 1)])
     lab = np.concatenate([lab, lab[f1], lab[f2]])
     return out, lab, (p[a] + p[b]) / 2, (lv[a] + lv[b]) / 2
+
+
+@dataclass(frozen=True, eq=False)
+class AngleRefined:
+    """vertices: (V + K, 3), the input vertices then K inserted ones; faces: the patch faces;
+    inserted: K; forced: (M,) whether a face's smallest angle lies between two edges that cannot
+    change (``corner_fixed``), so no refinement can raise it; bad: (M,) faces still below the target
+    that are not forced; rounds: insertion rounds run."""
+
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    inserted: int
+    forced: NDArray[np.bool_]
+    bad: NDArray[np.bool_]
+    rounds: int
+
+
+def corner_angles(p: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
+    """(M, 3) angle at each corner of each face, radians (column k: at f[:, k])."""
+    return np.stack([_angle_at(p, f[:, k], f[:, (k + 1) % 3], f[:, (k + 2) % 3]) for k in range(3)], axis=1)
+
+
+def _fixed_edge_mask(f: NDArray[np.int64], nv: int, keys: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """(M, 3) whether edge k of face i, (f[i, k], f[i, k+1]), has its key (min * nv + max) in ``keys``."""
+    a, b = f, np.roll(f, -1, axis=1)
+    k = np.minimum(a, b) * nv + np.maximum(a, b)
+    return np.isin(k, keys)
+
+
+def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: NDArray[np.int64], *,
+                  min_angle: float = 20.0, margin: float = 2.0, locked: NDArray[np.int64] | None = None,
+                  movable: NDArray[np.int64] | None = None, max_rounds: int = 40, budget: float = 3.0
+                  ) -> AngleRefined:
+    """Delaunay refinement of a patch for its angles: insert a point into every bad triangle until no
+    triangle has an angle below ``min_angle`` degrees, or only forced ones are left.
+
+    **(choice)**, beyond the spec's refinement (frep.md §4, :func:`refine`, which matches the density
+    of the surroundings but bounds no angle): Chew's / Ruppert's Delaunay refinement with Üngör's
+    off-centres (Üngör 2004, "Off-centers: a new type of Steiner points for computing size-optimal
+    quality-guaranteed Delaunay triangulations"). A triangle (x, a, b) with its smallest angle at x
+    (opposite the shortest edge ab) gets a new point on the perpendicular bisector of ab, in its
+    plane, at the distance that makes (a, b, new) equilateral, or at the circumcentre if that is
+    nearer (it is when the angle at x is above 30 degrees); the point lies in the triangle's
+    circumcircle, so the Delaunay flips that follow (:func:`relax`) remove the triangle. Where that
+    point falls outside the triangle (an obtuse corner at a or b) or too near another vertex, the
+    triangle's longest splittable edge is halved instead (Rivara's bisection). The target is
+    ``min_angle + margin`` so that the flips and the final positions keep the result above
+    ``min_angle``.
+
+    What cannot change: the hole border (edges shared with ``fixed_faces``) and ``locked`` edges
+    (continued creases) are never split nor flipped. A triangle whose smallest angle lies between two
+    such edges is **forced**: every triangulation of the patch has an angle at most that small at
+    that corner (e.g. a hole border corner of 10 degrees), so it is left as it is. A triangle with a
+    zero-length fixed edge (two input vertices at one position, a split non-manifold vertex) is forced
+    too. New points lie in the plane of the triangle they split, so the patch's shape does not change
+    (flips of non-planar quads aside). ``budget``: at most ``budget`` times the patch's faces are
+    inserted (a safety bound; refinement around forced corners stops by the forced test).
+    """
+    p = np.asarray(vertices, dtype=np.float64)
+    f = np.array(patch, dtype=np.int64, copy=True).reshape(-1, 3)
+    fixed = np.asarray(fixed_faces, dtype=np.int64).reshape(-1, 3)
+    target = np.radians(min_angle + margin)
+    pts = [p.copy()]
+    nv = len(p)
+    inserted = 0
+    limit = budget * max(len(f), 1)
+    forced = np.zeros(len(f), dtype=bool)
+    bad = np.zeros(len(f), dtype=bool)
+    rounds = 0
+    lk = np.asarray(locked, dtype=np.int64).reshape(-1, 2) if locked is not None and len(locked) else None
+    while rounds < max_rounds:  # sequential: insert, flip, measure again
+        rounds += 1
+        P = np.vstack(pts) if len(pts) > 1 else pts[0]
+        f, _ = relax(P, f, fixed, locked=lk)
+        forced, bad, choice = _bad_triangles(P, f, fixed, lk, target)
+        if not bad.any():
+            break
+        free = np.zeros(nv, dtype=bool)
+        free[len(p):] = True  # inserted points
+        if movable is not None:
+            free[np.asarray(movable, dtype=np.int64)] = True
+        moved = _smooth_bad(P, f, free, np.flatnonzero(bad))
+        if moved:
+            pts = [P]
+            f, _ = relax(P, f, fixed, locked=lk)
+            forced, bad, choice = _bad_triangles(P, f, fixed, lk, target)
+            if not bad.any():
+                break
+        new_pts = np.zeros((0, 3))
+        if inserted < limit:
+            new_pts, f = _insert(P, f, fixed, lk, np.flatnonzero(bad), choice, nv)
+        if not len(new_pts) and not moved:
+            break
+        if len(new_pts):
+            pts.append(new_pts)
+            nv += len(new_pts)
+            inserted += len(new_pts)
+    P = np.vstack(pts) if len(pts) > 1 else pts[0]
+    ang = corner_angles(P, f).min(axis=1)
+    forced, bad, _ = _bad_triangles(P, f, fixed, lk, np.radians(min_angle))
+    return AngleRefined(P, f, inserted, forced & (ang < np.radians(min_angle)), bad, rounds)
+
+
+def _unchangeable(f: NDArray[np.int64], nv: int, fixed: NDArray[np.int64],
+                  locked: NDArray[np.int64] | None) -> NDArray[np.bool_]:
+    """(M, 3) whether edge k of each patch face (f[:, k] -> f[:, k+1]) can neither split nor flip: a
+    hole border edge (an edge of a fixed face), a locked edge, or an edge with one patch face."""
+    keys = []
+    if len(fixed):
+        keys.append(np.sort(halfedges(fixed), axis=1) @ np.array([nv, 1]))
+    if locked is not None:
+        keys.append(np.sort(locked, axis=1) @ np.array([nv, 1]))
+    out = _fixed_edge_mask(f, nv, np.unique(np.concatenate(keys))) if keys else np.zeros(f.shape, dtype=bool)
+    he = np.sort(halfedges(f), axis=1) @ np.array([nv, 1])
+    _, inv, cnt = np.unique(he, return_inverse=True, return_counts=True)
+    return out | (cnt[inv] < 2).reshape(-1, 3)
+
+
+def _bad_triangles(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
+                   locked: NDArray[np.int64] | None, target: float
+                   ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.int64]]:
+    """(forced, bad, corner of the smallest angle) per face; bad = below ``target`` and not forced."""
+    if not len(f):
+        z = np.zeros(0, dtype=bool)
+        return z, z, np.zeros(0, dtype=np.int64)
+    ang = corner_angles(p, f)
+    k = np.argmin(ang, axis=1)
+    small = ang[np.arange(len(f)), k] < target
+    stuck = _unchangeable(f, len(p), fixed, locked)
+    r = np.arange(len(f))
+    # edges at corner k: edge k (f[k] -> f[k+1]) and edge k-1 (f[k-1] -> f[k])
+    corner_fixed = stuck[r, k] & stuck[r, (k + 2) % 3]
+    ln = np.linalg.norm(p[f] - p[np.roll(f, -1, axis=1)], axis=2)
+    glued = ((ln <= 1e-12 * max(1.0, float(ln.max()))) & stuck).any(axis=1)  # a split non-manifold vertex
+    forced = small & (corner_fixed | glued)
+    return forced, small & ~forced, k
+
+
+def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64], locked: NDArray[np.int64] | None,
+            bad: NDArray[np.int64], corner: NDArray[np.int64], nv: int
+            ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """One round of insertions into the bad faces (worst first, each face used once): off-centre
+    points split their face in three; the fallback halves an edge (both its faces). Returns (new
+    points, faces)."""
+    from scipy.spatial import cKDTree
+
+    ang = corner_angles(p, f[bad]).min(axis=1)
+    bad = bad[np.argsort(ang, kind="stable")]
+    k = corner[bad]
+    r = np.arange(len(bad))
+    x = f[bad, k]
+    a = f[bad, (k + 1) % 3]
+    b = f[bad, (k + 2) % 3]
+    ab = p[b] - p[a]
+    lab = np.linalg.norm(ab, axis=1)
+    mid = (p[a] + p[b]) / 2
+    toward = p[x] - mid
+    ue = ab / np.maximum(lab, 1e-300)[:, None]
+    u = toward - np.einsum("ij,ij->i", toward, ue)[:, None] * ue
+    un = np.linalg.norm(u, axis=1)
+    u /= np.maximum(un, 1e-300)[:, None]
+    theta = corner_angles(p, f[bad])[r, k]
+    # (a, b, q) equilateral, or the circumcentre (distance |ab| / (2 tan theta) from mid) if nearer
+    d = np.minimum(np.sqrt(3) / 2 * lab, lab / (2 * np.tan(np.maximum(theta, 1e-12))))
+    q = mid + d[:, None] * u
+    # barycentric coordinates of q in (x, a, b)
+    e0, e1, w = p[a] - p[x], p[b] - p[x], q - p[x]
+    d00, d01, d11 = (e0 * e0).sum(1), (e0 * e1).sum(1), (e1 * e1).sum(1)
+    d20, d21 = (w * e0).sum(1), (w * e1).sum(1)
+    den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
+    s = (d11 * d20 - d01 * d21) / den
+    t = (d00 * d21 - d01 * d20) / den
+    inside = (s > 0.02) & (t > 0.02) & (1 - s - t > 0.02) & (un > 0)
+    tree = cKDTree(p)
+    near, _ = tree.query(q)
+    ok_pt = inside & (near > 0.5 * lab)
+    # Ruppert's encroachment rule for the edges that cannot split: a point inside the diametral
+    # ball of a border / locked edge is not inserted (it would make a flat triangle on that edge)
+    stuck = _unchangeable(f, len(p), fixed, locked)
+    se = np.stack([f[stuck], np.roll(f, -1, axis=1)[stuck]], axis=1)
+    if len(se):
+        sm = (p[se[:, 0]] + p[se[:, 1]]) / 2
+        sr = np.linalg.norm(p[se[:, 0]] - p[se[:, 1]], axis=1) / 2
+        s_tree = cKDTree(sm)
+
+        def encroaches(x: NDArray[np.float64]) -> NDArray[np.bool_]:
+            kq = min(8, len(se))
+            dq, iq = s_tree.query(x.reshape(-1, 3), k=kq)
+            dq, iq = dq.reshape(-1, kq), iq.reshape(-1, kq)
+            return (dq < sr[iq] * (1 - 1e-9)).any(axis=1)
+
+        ok_pt &= ~encroaches(q)
+    else:
+        def encroaches(x: NDArray[np.float64]) -> NDArray[np.bool_]:
+            return np.zeros(len(x.reshape(-1, 3)), dtype=bool)
+    # the fallback: the longest edge of the face that may split (not a border / locked / single edge)
+    he = halfedges(f)
+    hkey = he[:, 0] * len(p) + he[:, 1]
+    order = np.argsort(hkey)
+    taken = np.zeros(len(f), dtype=bool)
+    new: list[NDArray[np.float64]] = []
+    faces = [f]
+    grow: list[NDArray[np.int64]] = []
+    accepted: list[NDArray[np.float64]] = []
+    acc_r: list[float] = []
+    for i in range(len(bad)):  # sequential: a greedy independent set, worst face first (tens of faces)
+        fi = int(bad[i])
+        if taken[fi]:
+            continue
+        if ok_pt[i] and all(np.linalg.norm(q[i] - c) > rr for c, rr in zip(accepted, acc_r)):
+            taken[fi] = True
+            m = nv + len(new)
+            new.append(q[i])
+            accepted.append(q[i])
+            acc_r.append(0.5 * float(lab[i]))
+            i0, i1, i2 = f[fi]
+            f[fi] = (i0, i1, m)
+            grow.append(np.array([[i1, i2, m], [i2, i0, m]]))
+            continue
+        tri = p[f[fi]]
+        el = np.linalg.norm(tri[[1, 2, 0]] - tri, axis=1)
+        el[stuck[fi]] = -1
+        e = int(np.argmax(el))
+        if el[e] <= 0:
+            continue
+        ea, eb = f[fi, e], f[fi, (e + 1) % 3]
+        j = order[np.searchsorted(hkey[order], eb * len(p) + ea)]
+        g = int(j // 3)
+        mp = (p[ea] + p[eb]) / 2
+        if taken[g] or encroaches(mp)[0] or any(np.linalg.norm(mp - c) <= rr for c, rr in zip(accepted, acc_r)):
+            continue
+        taken[fi] = taken[g] = True
+        m = nv + len(new)
+        new.append(mp)
+        accepted.append(mp)
+        acc_r.append(0.25 * float(el[e]))
+        c = f[fi, (e + 2) % 3]
+        dd = f[g, (j % 3 + 2) % 3]
+        f[fi] = (ea, m, c)
+        f[g] = (eb, m, dd)
+        grow.append(np.array([[m, eb, c], [m, ea, dd]]))
+    if not new:
+        return np.zeros((0, 3)), f
+    return np.asarray(new), np.vstack(faces + grow)
+
+
+def _smooth_bad(p: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.bool_], bad: NDArray[np.int64],
+                *, tries: int = 3) -> int:
+    """Move the free vertices of the bad faces, in place, to raise the smallest angle of their faces
+    (smart Laplacian smoothing, in the vertex's tangent plane): candidates are the umbrella step
+    towards the centroid of the neighbours (fair.tangential_relax's step) and, for the face of the
+    star with the smallest angle, the apex of the equilateral triangle on its edge opposite the
+    vertex, each at full, half and quarter length; the best candidate that raises the star's
+    smallest angle without folding a face is kept. A free vertex near a fixed edge, where no point
+    may be inserted (the encroachment rule of :func:`_insert`), can only be moved. Returns the
+    number of moves kept."""
+    cand = np.unique(f[bad])
+    cand = cand[free[cand]]
+    if not len(cand):
+        return 0
+    order = np.argsort(f.ravel(), kind="stable")
+    flat = f.ravel()[order]
+    start = np.searchsorted(flat, cand)
+    stop = np.searchsorted(flat, cand, side="right")
+    kept = 0
+    for _ in range(tries):  # sequential: each vertex moves against its neighbours' current positions
+        for c, s0, s1 in zip(cand, start, stop):
+            star = f[order[s0:s1] // 3]
+            nb = np.unique(star)
+            nb = nb[nb != c]
+            t = p[star]
+            nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
+            nn = np.linalg.norm(nrm)
+            if not len(nb) or nn == 0:
+                continue
+            nrm /= nn
+            ang = corner_angles(p, star)
+            before = ang.min()
+            # the face with the smallest angle: the equilateral apex on its edge opposite c
+            w = star[int(np.argmin(ang.min(axis=1)))]
+            kc = int(np.flatnonzero(w == c)[0])
+            ea, eb = p[w[(kc + 1) % 3]], p[w[(kc + 2) % 3]]
+            e = eb - ea
+            side = np.cross(nrm, e)
+            side /= max(float(np.linalg.norm(side)), 1e-300)
+            if side @ (p[c] - (ea + eb) / 2) < 0:
+                side = -side
+            apex = (ea + eb) / 2 + np.sqrt(3) / 2 * float(np.linalg.norm(e)) * side
+            old = p[c].copy()
+            best, best_pos = before, None
+            for target in (p[nb].mean(axis=0), apex):
+                dlt = target - old
+                dlt -= (dlt @ nrm) * nrm
+                for step in (1.0, 0.5, 0.25):
+                    p[c] = old + step * dlt
+                    t2 = p[star]
+                    n2 = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
+                    if (n2 @ nrm <= 0).any():
+                        continue
+                    m = corner_angles(p, star).min()
+                    if m > best:
+                        best, best_pos = m, p[c].copy()
+            p[c] = old if best_pos is None else best_pos
+            kept += best_pos is not None
+    return kept
