@@ -235,8 +235,8 @@ def _fixed_edge_mask(f: NDArray[np.int64], nv: int, keys: NDArray[np.int64]) -> 
 
 def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: NDArray[np.int64], *,
                   min_angle: float = 20.0, margin: float = 2.0, locked: NDArray[np.int64] | None = None,
-                  movable: NDArray[np.int64] | None = None, max_rounds: int = 40, budget: float = 3.0
-                  ) -> AngleRefined:
+                  movable: NDArray[np.int64] | None = None, max_rounds: int = 40, budget: float = 3.0,
+                  rings: int = 3) -> AngleRefined:
     """Delaunay refinement of a patch for its angles: insert a point into every bad triangle until no
     triangle has an angle below ``min_angle`` degrees, or only forced ones are left.
 
@@ -257,54 +257,75 @@ def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed
     (continued creases) are never split nor flipped. A triangle whose smallest angle lies between two
     such edges is **forced**: every triangulation of the patch has an angle at most that small at
     that corner (e.g. a hole border corner of 10 degrees), so it is left as it is. A triangle with a
-    zero-length fixed edge (two input vertices at one position, a split non-manifold vertex) is forced
-    too. New points lie in the plane of the triangle they split, so the patch's shape does not change
-    (flips of non-planar quads aside). ``budget``: at most ``budget`` times the patch's faces are
-    inserted (a safety bound; refinement around forced corners stops by the forced test).
+    zero-length edge (two input vertices at one position, a split non-manifold vertex) is forced
+    too (the copies stay apart in the output; merged, the face vanishes). New points lie in the
+    plane of the triangle they split, so the patch's shape does not change (flips of non-planar
+    quads aside); smoothing moves vertices in their tangent plane only. ``budget``: at most
+    ``budget`` times the patch's faces are inserted (a safety bound; refinement around forced
+    corners stops by the forced test).
+    ``movable``: vertices (besides the inserted ones) that the smoothing may move (new vertices of
+    the patch; never input vertices). ``rings``: how far around the bad faces the patch may change.
     """
     p = np.asarray(vertices, dtype=np.float64)
     f = np.array(patch, dtype=np.int64, copy=True).reshape(-1, 3)
     fixed = np.asarray(fixed_faces, dtype=np.int64).reshape(-1, 3)
     target = np.radians(min_angle + margin)
-    pts = [p.copy()]
-    nv = len(p)
-    inserted = 0
-    limit = budget * max(len(f), 1)
-    forced = np.zeros(len(f), dtype=bool)
-    bad = np.zeros(len(f), dtype=bool)
-    rounds = 0
     lk = np.asarray(locked, dtype=np.int64).reshape(-1, 2) if locked is not None and len(locked) else None
-    while rounds < max_rounds:  # sequential: insert, flip, measure again
-        rounds += 1
-        P = np.vstack(pts) if len(pts) > 1 else pts[0]
-        f, _ = relax(P, f, fixed, locked=lk)
-        forced, bad, choice = _bad_triangles(P, f, fixed, lk, target)
-        if not bad.any():
-            break
-        free = np.zeros(nv, dtype=bool)
-        free[len(p):] = True  # inserted points
+    f, _ = relax(p, f, fixed, locked=lk)
+    _, bad, _ = _bad_triangles(p, f, fixed, lk, target)
+    P, rest, inserted, rounds = p, np.zeros((0, 3), dtype=np.int64), 0, 0
+    if bad.any():
+        # only the faces within ``rings`` rings of the bad ones change: the rest of the patch is held
+        # like the fixed faces (its edges next to the region do not flip), so a round costs what the
+        # region costs, not what the whole patch does
+        near = np.zeros(len(p), dtype=bool)
+        near[f[bad]] = True
+        for _ in range(rings):
+            near[f[near[f].any(axis=1)]] = True
+        region = near[f].any(axis=1)
+        rest = f[~region]
+        held = np.vstack([fixed, rest[near[rest].any(axis=1)]])
+        free = np.zeros(len(p), dtype=bool)
         if movable is not None:
             free[np.asarray(movable, dtype=np.int64)] = True
+        P, sub, inserted, rounds = _refine_region(p, f[region], held, lk, free, target,
+                                                  max_rounds, int(budget * max(len(f), 1)))
+        f = np.vstack([rest, sub])
+    ang = corner_angles(P, f).min(axis=1)
+    forced, bad, _ = _bad_triangles(P, f, fixed, lk, np.radians(min_angle))
+    return AngleRefined(P, f, inserted, forced & (ang < np.radians(min_angle)), bad, rounds)
+
+
+def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
+                   lk: NDArray[np.int64] | None, movable: NDArray[np.bool_], target: float, max_rounds: int,
+                   limit: int) -> tuple[NDArray[np.float64], NDArray[np.int64], int, int]:
+    """The rounds of :func:`refine_angles` on one region: smooth, flip, insert, flip. Returns
+    (vertices, faces, points inserted, rounds)."""
+    P = p.copy()
+    nv0 = len(p)
+    inserted = rounds = 0
+    while rounds < max_rounds:  # sequential: smooth, flip, insert, measure again
+        rounds += 1
+        f, _ = relax(P, f, fixed, locked=lk)
+        _, bad, choice = _bad_triangles(P, f, fixed, lk, target)
+        if not bad.any():
+            break
+        free = np.concatenate([movable, np.ones(len(P) - nv0, dtype=bool)])  # inserted points move too
         moved = _smooth_bad(P, f, free, np.flatnonzero(bad))
         if moved:
-            pts = [P]
             f, _ = relax(P, f, fixed, locked=lk)
-            forced, bad, choice = _bad_triangles(P, f, fixed, lk, target)
+            _, bad, choice = _bad_triangles(P, f, fixed, lk, target)
             if not bad.any():
                 break
         new_pts = np.zeros((0, 3))
         if inserted < limit:
-            new_pts, f = _insert(P, f, fixed, lk, np.flatnonzero(bad), choice, nv)
+            new_pts, f = _insert(P, f, fixed, lk, np.flatnonzero(bad), choice, len(P))
         if not len(new_pts) and not moved:
             break
         if len(new_pts):
-            pts.append(new_pts)
-            nv += len(new_pts)
+            P = np.vstack([P, new_pts])
             inserted += len(new_pts)
-    P = np.vstack(pts) if len(pts) > 1 else pts[0]
-    ang = corner_angles(P, f).min(axis=1)
-    forced, bad, _ = _bad_triangles(P, f, fixed, lk, np.radians(min_angle))
-    return AngleRefined(P, f, inserted, forced & (ang < np.radians(min_angle)), bad, rounds)
+    return P, f, inserted, rounds
 
 
 def _unchangeable(f: NDArray[np.int64], nv: int, fixed: NDArray[np.int64],
@@ -337,7 +358,7 @@ def _bad_triangles(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
     # edges at corner k: edge k (f[k] -> f[k+1]) and edge k-1 (f[k-1] -> f[k])
     corner_fixed = stuck[r, k] & stuck[r, (k + 2) % 3]
     ln = np.linalg.norm(p[f] - p[np.roll(f, -1, axis=1)], axis=2)
-    glued = ((ln <= 1e-12 * max(1.0, float(ln.max()))) & stuck).any(axis=1)  # a split non-manifold vertex
+    glued = (ln <= 1e-12 * max(1.0, float(ln.max()))).any(axis=1)  # two copies of a split non-manifold vertex
     forced = small & (corner_fixed | glued)
     return forced, small & ~forced, k
 
@@ -377,8 +398,8 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     s = (d11 * d20 - d01 * d21) / den
     t = (d00 * d21 - d01 * d20) / den
     inside = (s > 0.02) & (t > 0.02) & (1 - s - t > 0.02) & (un > 0)
-    tree = cKDTree(p)
-    near, _ = tree.query(q)
+    used = np.unique(f)
+    near, _ = cKDTree(p[used]).query(q)
     ok_pt = inside & (near > 0.5 * lab)
     # Ruppert's encroachment rule for the edges that cannot split: a point inside the diametral
     # ball of a border / locked edge is not inserted (it would make a flat triangle on that edge)
@@ -451,15 +472,15 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
 
 
 def _smooth_bad(p: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.bool_], bad: NDArray[np.int64],
-                *, tries: int = 3) -> int:
+                *, tries: int = 3, gain: float = np.radians(0.1)) -> int:
     """Move the free vertices of the bad faces, in place, to raise the smallest angle of their faces
     (smart Laplacian smoothing, in the vertex's tangent plane): candidates are the umbrella step
     towards the centroid of the neighbours (fair.tangential_relax's step) and, for the face of the
     star with the smallest angle, the apex of the equilateral triangle on its edge opposite the
     vertex, each at full, half and quarter length; the best candidate that raises the star's
-    smallest angle without folding a face is kept. A free vertex near a fixed edge, where no point
-    may be inserted (the encroachment rule of :func:`_insert`), can only be moved. Returns the
-    number of moves kept."""
+    smallest angle by more than ``gain`` (radians) without folding a face is kept. A free vertex near
+    a fixed edge, where no point may be inserted (the encroachment rule of :func:`_insert`), can
+    only be moved. Returns the number of moves kept."""
     cand = np.unique(f[bad])
     cand = cand[free[cand]]
     if not len(cand):
@@ -469,7 +490,9 @@ def _smooth_bad(p: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.b
     start = np.searchsorted(flat, cand)
     stop = np.searchsorted(flat, cand, side="right")
     kept = 0
+    steps = np.array([1.0, 0.5, 0.25])
     for _ in range(tries):  # sequential: each vertex moves against its neighbours' current positions
+        moved = 0
         for c, s0, s1 in zip(cand, start, stop):
             star = f[order[s0:s1] // 3]
             nb = np.unique(star)
@@ -480,7 +503,7 @@ def _smooth_bad(p: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.b
             if not len(nb) or nn == 0:
                 continue
             nrm /= nn
-            ang = corner_angles(p, star)
+            ang = _tri_angles(t)
             before = ang.min()
             # the face with the smallest angle: the equilateral apex on its edge opposite c
             w = star[int(np.argmin(ang.min(axis=1)))]
@@ -492,20 +515,29 @@ def _smooth_bad(p: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.b
             if side @ (p[c] - (ea + eb) / 2) < 0:
                 side = -side
             apex = (ea + eb) / 2 + np.sqrt(3) / 2 * float(np.linalg.norm(e)) * side
-            old = p[c].copy()
-            best, best_pos = before, None
-            for target in (p[nb].mean(axis=0), apex):
-                dlt = target - old
-                dlt -= (dlt @ nrm) * nrm
-                for step in (1.0, 0.5, 0.25):
-                    p[c] = old + step * dlt
-                    t2 = p[star]
-                    n2 = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
-                    if (n2 @ nrm <= 0).any():
-                        continue
-                    m = corner_angles(p, star).min()
-                    if m > best:
-                        best, best_pos = m, p[c].copy()
-            p[c] = old if best_pos is None else best_pos
-            kept += best_pos is not None
+            dl = np.stack([p[nb].mean(axis=0) - p[c], apex - p[c]])
+            dl -= (dl @ nrm)[:, None] * nrm
+            trial = p[c] + (steps[None, :, None] * dl[:, None, :]).reshape(-1, 3)  # (6, 3)
+            tt = np.broadcast_to(t, (len(trial),) + t.shape).copy()
+            tt[:, star == c] = trial[:, None, :]
+            n2 = np.cross(tt[:, :, 1] - tt[:, :, 0], tt[:, :, 2] - tt[:, :, 0])
+            score = _tri_angles(tt).min(axis=(1, 2))
+            score[((n2 @ nrm) <= 0).any(axis=1)] = -1.0  # a fold
+            b = int(np.argmax(score))
+            if score[b] > before + gain:
+                p[c] = trial[b]
+                moved += 1
+        kept += moved
+        if not moved:
+            break
     return kept
+
+
+def _tri_angles(t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(..., 3) corner angles (radians) of triangles given as (..., 3, 3) corner positions."""
+    out = np.empty(t.shape[:-1])
+    for k in range(3):
+        u = t[..., (k + 1) % 3, :] - t[..., k, :]
+        w = t[..., (k + 2) % 3, :] - t[..., k, :]
+        out[..., k] = np.arctan2(np.linalg.norm(np.cross(u, w), axis=-1), np.einsum("...i,...i->...", u, w))
+    return out
