@@ -303,7 +303,7 @@ def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
     (vertices, faces, points inserted, rounds)."""
     P = p.copy()
     nv0 = len(p)
-    inserted = rounds = 0
+    inserted = rounds = idle = 0
     while rounds < max_rounds:  # sequential: smooth, flip, insert, measure again
         rounds += 1
         f, _ = relax(P, f, fixed, locked=lk)
@@ -320,12 +320,27 @@ def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
         new_pts = np.zeros((0, 3))
         if inserted < limit:
             new_pts, f = _insert(P, f, fixed, lk, np.flatnonzero(bad), choice, len(P))
-        if not len(new_pts) and not moved:
+        idle = 0 if len(new_pts) else idle + 1
+        if not len(new_pts) and not moved or idle >= 2:  # two rounds of moves alone: settled
             break
         if len(new_pts):
             P = np.vstack([P, new_pts])
             inserted += len(new_pts)
     return P, f, inserted, rounds
+
+
+def _inside(p: NDArray[np.float64], tri: NDArray[np.int64], q: NDArray[np.float64], *,
+            margin: float = 0.02) -> NDArray[np.bool_]:
+    """(K,) whether q[i] projected into the plane of triangle tri[i] lies inside it, every
+    barycentric coordinate above ``margin``."""
+    x, a, b = p[tri[:, 0]], p[tri[:, 1]], p[tri[:, 2]]
+    e0, e1, w = a - x, b - x, q - x
+    d00, d01, d11 = (e0 * e0).sum(1), (e0 * e1).sum(1), (e1 * e1).sum(1)
+    d20, d21 = (w * e0).sum(1), (w * e1).sum(1)
+    den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
+    s = (d11 * d20 - d01 * d21) / den
+    t = (d00 * d21 - d01 * d20) / den
+    return (s > margin) & (t > margin) & (1 - s - t > margin)
 
 
 def _unchangeable(f: NDArray[np.int64], nv: int, fixed: NDArray[np.int64],
@@ -390,17 +405,10 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     # (a, b, q) equilateral, or the circumcentre (distance |ab| / (2 tan theta) from mid) if nearer
     d = np.minimum(np.sqrt(3) / 2 * lab, lab / (2 * np.tan(np.maximum(theta, 1e-12))))
     q = mid + d[:, None] * u
-    # barycentric coordinates of q in (x, a, b)
-    e0, e1, w = p[a] - p[x], p[b] - p[x], q - p[x]
-    d00, d01, d11 = (e0 * e0).sum(1), (e0 * e1).sum(1), (e1 * e1).sum(1)
-    d20, d21 = (w * e0).sum(1), (w * e1).sum(1)
-    den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
-    s = (d11 * d20 - d01 * d21) / den
-    t = (d00 * d21 - d01 * d20) / den
-    inside = (s > 0.02) & (t > 0.02) & (1 - s - t > 0.02) & (un > 0)
+    inside = _inside(p, np.stack([x, a, b], 1), q) & (un > 0)
     used = np.unique(f)
     near, _ = cKDTree(p[used]).query(q)
-    ok_pt = inside & (near > 0.5 * lab)
+    ok_pt = near > 0.5 * lab  # inside the face, or (below) in a neighbour across an edge at x
     # Ruppert's encroachment rule for the edges that cannot split: a point inside the diametral
     # ball of a border / locked edge is not inserted (it would make a flat triangle on that edge)
     stuck = _unchangeable(f, len(p), fixed, locked)
@@ -434,14 +442,31 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
         fi = int(bad[i])
         if taken[fi]:
             continue
+        host = -1
         if ok_pt[i] and all(np.linalg.norm(q[i] - c) > rr for c, rr in zip(accepted, acc_r)):
-            taken[fi] = True
+            if inside[i]:
+                host = fi
+            else:  # an obtuse corner at a or b: the point lies across the edge (x, a) or (b, x)
+                for e in (int(k[i]), (int(k[i]) + 2) % 3):
+                    if stuck[fi, e]:
+                        continue
+                    ea, eb = f[fi, e], f[fi, (e + 1) % 3]
+                    g = int(order[np.searchsorted(hkey[order], eb * len(p) + ea)] // 3)
+                    if not taken[g] and _inside(p, f[g][None], q[i][None])[0]:
+                        host = g
+                        break
+        if host >= 0:
+            taken[fi] = taken[host] = True
             m = nv + len(new)
+            th = p[f[host]]
+            nh = np.cross(th[1] - th[0], th[2] - th[0])
+            nh /= max(float(np.linalg.norm(nh)), 1e-300)
+            q[i] -= ((q[i] - th[0]) @ nh) * nh  # in the plane of the face it splits
             new.append(q[i])
             accepted.append(q[i])
             acc_r.append(0.5 * float(lab[i]))
-            i0, i1, i2 = f[fi]
-            f[fi] = (i0, i1, m)
+            i0, i1, i2 = f[host]
+            f[host] = (i0, i1, m)
             grow.append(np.array([[i1, i2, m], [i2, i0, m]]))
             continue
         tri = p[f[fi]]
