@@ -320,8 +320,11 @@ def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
         new_pts = np.zeros((0, 3))
         if inserted < limit:
             new_pts, f = _insert(P, f, fixed, lk, np.flatnonzero(bad), choice, len(P))
-        idle = 0 if len(new_pts) else idle + 1
-        if not len(new_pts) and not moved or idle >= 2:  # two rounds of moves alone: settled
+        removed = 0
+        if not len(new_pts):  # Ruppert would split the border edge a free vertex encroaches: remove it
+            f, removed = _collapse_bad(P, f, fixed, lk, free, np.flatnonzero(bad))
+        idle = 0 if len(new_pts) or removed else idle + 1
+        if not len(new_pts) and not moved and not removed or idle >= 2:  # two rounds of moves alone: settled
             break
         if len(new_pts):
             P = np.vstack([P, new_pts])
@@ -566,3 +569,59 @@ def _tri_angles(t: NDArray[np.float64]) -> NDArray[np.float64]:
         w = t[..., (k + 2) % 3, :] - t[..., k, :]
         out[..., k] = np.arctan2(np.linalg.norm(np.cross(u, w), axis=-1), np.einsum("...i,...i->...", u, w))
     return out
+
+
+def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
+                  locked: NDArray[np.int64] | None, free: NDArray[np.bool_], bad: NDArray[np.int64]
+                  ) -> tuple[NDArray[np.int64], int]:
+    """Remove free vertices of the bad faces by collapsing each onto the neighbour that leaves the
+    best smallest angle, when that raises the smallest angle of its faces: the vertex a Delaunay
+    refinement could not fix (one inside the diametral ball of a border edge, which may not split,
+    so no point can be inserted near it and moving it does not help). A collapse keeps the surface
+    a manifold (the link condition: the two ends share only the two vertices opposite their edge),
+    folds no face and never touches a vertex on a border, locked or single edge. Returns (faces,
+    collapses); the removed vertex stays in ``p``, unreferenced."""
+    stuck = _unchangeable(f, len(p), fixed, locked)
+    nv = len(p)
+    a, b = f[stuck], np.roll(f, -1, axis=1)[stuck]
+    on_stuck = np.zeros(nv, dtype=bool)
+    on_stuck[a] = True
+    on_stuck[b] = True
+    cand = np.unique(f[bad])
+    cand = cand[free[cand] & ~on_stuck[cand]]
+    done = 0
+    for c in cand:  # sequential: each collapse changes the stars of the next candidates
+        rows = np.flatnonzero((f == c).any(axis=1))
+        if not len(rows):
+            continue
+        star = f[rows]
+        t = p[star]
+        n_old = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        before = corner_angles(p, star).min()
+        ring = set(np.unique(star).tolist()) - {int(c)}
+        best = None
+        for u in ring:
+            both = (star == u).any(axis=1)
+            if both.sum() != 2:
+                continue
+            opp = set(np.unique(star[both]).tolist()) - {int(c), u}
+            nu = set(np.unique(f[(f == u).any(axis=1)]).tolist()) - {u}
+            if nu & ring != opp:
+                continue  # the link condition
+            nf = star[~both].copy()
+            nf[nf == c] = u
+            t2 = p[nf]
+            n_new = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
+            if (np.einsum("ij,ij->i", n_new, n_old[~both]) <= 0).any():
+                continue  # a fold
+            m = corner_angles(p, nf).min()
+            if m > before and (best is None or m > best[0]):
+                best = (m, both, nf)
+        if best is None:
+            continue
+        _, both, nf = best
+        f = f.copy()
+        f[rows[~both]] = nf
+        f = np.delete(f, rows[both], axis=0)
+        done += 1
+    return f, done
