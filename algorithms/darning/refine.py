@@ -284,16 +284,27 @@ def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed
             near[f[near[f].any(axis=1)]] = True
         region = near[f].any(axis=1)
         rest = f[~region]
-        held = np.vstack([fixed, rest[near[rest].any(axis=1)]])
+        inside = np.zeros(len(p), dtype=bool)
+        inside[f[region]] = True
+        held = np.vstack([fixed, rest[inside[rest].any(axis=1)]])  # every other face at a region vertex
         free = np.zeros(len(p), dtype=bool)
         if movable is not None:
             free[np.asarray(movable, dtype=np.int64)] = True
         P, sub, inserted, rounds = _refine_region(p, f[region], held, lk, free, target,
                                                   max_rounds, int(budget * max(len(f), 1)))
-        f = np.vstack([rest, sub])
+        if _manifold(np.vstack([held, sub])) or not _manifold(np.vstack([held, f[region]])):
+            f = np.vstack([rest, sub])
+        else:  # a safety net: a region that lost its manifold edges is not used
+            P, inserted = p, 0
     ang = corner_angles(P, f).min(axis=1)
     forced, bad, _ = _bad_triangles(P, f, fixed, lk, np.radians(min_angle))
     return AngleRefined(P, f, inserted, forced & (ang < np.radians(min_angle)), bad, rounds)
+
+
+def _manifold(faces: NDArray[np.int64]) -> bool:
+    """No edge has more than two faces, and no directed edge appears twice."""
+    he = halfedges(faces)
+    return bool(edge_table(faces).counts.max(initial=0) <= 2 and len(np.unique(he, axis=0)) == len(he))
 
 
 def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
@@ -605,7 +616,9 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
             if both.sum() != 2:
                 continue
             opp = set(np.unique(star[both]).tolist()) - {int(c), u}
-            nu = set(np.unique(f[(f == u).any(axis=1)]).tolist()) - {u}
+            nu = set(np.unique(f[(f == u).any(axis=1)]).tolist())
+            nu |= set(np.unique(fixed[(fixed == u).any(axis=1)]).tolist())  # and among the fixed faces
+            nu -= {u}
             if nu & ring != opp:
                 continue  # the link condition
             nf = star[~both].copy()
