@@ -333,7 +333,9 @@ def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
             new_pts, f = _insert(P, f, fixed, lk, np.flatnonzero(bad), choice, len(P))
         removed = 0
         if not len(new_pts):  # Ruppert would split the border edge a free vertex encroaches: remove it
-            f, removed = _collapse_bad(P, f, fixed, lk, free, np.flatnonzero(bad))
+            # (not the points inserted here: inserting and removing one could alternate for ever)
+            f, removed = _collapse_bad(P, f, fixed, lk, np.r_[movable, np.zeros(len(P) - nv0, dtype=bool)],
+                                       np.flatnonzero(bad))
         idle = 0 if len(new_pts) or removed else idle + 1
         if not len(new_pts) and not moved and not removed or idle >= 2:  # two rounds of moves alone: settled
             break
@@ -587,10 +589,11 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
                   ) -> tuple[NDArray[np.int64], int]:
     """Remove free vertices of the bad faces by collapsing each onto the neighbour that leaves the
     best smallest angle, when that raises the smallest angle of its faces: the vertex a Delaunay
-    refinement could not fix (one inside the diametral ball of a border edge, which may not split,
-    so no point can be inserted near it and moving it does not help). A collapse keeps the surface
-    a manifold (the link condition: the two ends share only the two vertices opposite their edge),
-    folds no face and never touches a vertex on a border, locked or single edge. Returns (faces,
+    refinement could not fix: only a vertex inside the diametral ball of a border edge, which may
+    not split, so no point can be inserted near it (and moving it did not help). A collapse keeps
+    the surface a manifold (the link condition: the two ends share only the two vertices opposite
+    their edge), folds no face and never touches a vertex on a border, locked or single edge.
+    Returns (faces,
     collapses); the removed vertex stays in ``p``, unreferenced."""
     stuck = _unchangeable(f, len(p), fixed, locked)
     nv = len(p)
@@ -600,6 +603,14 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
     on_stuck[b] = True
     cand = np.unique(f[bad])
     cand = cand[free[cand] & ~on_stuck[cand]]
+    if len(cand) and len(a):  # only vertices inside the diametral ball of a border / locked edge
+        from scipy.spatial import cKDTree
+
+        mid = (p[a] + p[b]) / 2
+        rad = np.linalg.norm(p[a] - p[b], axis=1) / 2
+        kq = min(8, len(a))
+        dq, iq = cKDTree(mid).query(p[cand], k=kq)
+        cand = cand[(dq.reshape(len(cand), kq) < rad[iq.reshape(len(cand), kq)]).any(axis=1)]
     done = 0
     for c in cand:  # sequential: each collapse changes the stars of the next candidates
         rows = np.flatnonzero((f == c).any(axis=1))
