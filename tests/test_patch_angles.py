@@ -87,3 +87,29 @@ def test_hole_on_a_sphere_has_no_patch_angle_below_20_degrees():
     assert ang.min() >= 20.0
     t = res.report()["output"]
     assert t["watertight"] and t["genus"] == 0
+
+
+def test_free_vertex_on_a_border_edge_is_moved_or_removed():
+    # a unit square hole with a ring around it; the patch is a fan around a free vertex that sits
+    # almost on the bottom border edge (a 178 degree cap there, a 1 degree angle at each corner)
+    sq = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    out = np.array([[-1, -1, 0], [2, -1, 0], [2, 2, 0], [-1, 2, 0]], dtype=float)
+    v = np.vstack([sq, out, [[0.5, 0.01, 0.0]]])
+    i = np.arange(4)
+    j = (i + 1) % 4
+    ring = np.vstack([np.stack([i, 4 + i, 4 + j], 1), np.stack([i, 4 + j, j], 1)])
+    patch = np.stack([j, i, np.full(4, 8)], 1)
+    assert triangle_angles(v, patch).min() < 2
+    q = refine_angles(v, patch, ring, movable=np.array([8]))
+    ang = triangle_angles(q.vertices, q.faces)
+    assert ang.min() >= 20.0 and not q.bad.any() and not q.forced.any()
+    np.testing.assert_array_equal(q.vertices[:8], v[:8])
+    t = q.vertices[q.faces]
+    assert np.isclose(abs(0.5 * np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])[:, 2].sum()), 1.0)
+    np.testing.assert_allclose(q.vertices[8], [0.5, 0.5, 0.0], atol=1e-12)  # moved to the centre
+    # the same patch with the vertex held (not movable, e.g. a crease chain's): no point may go into
+    # the diametral ball of the bottom edge (Ruppert's rule), nor can the held vertex be collapsed,
+    # so the cap stays and is reported as not fixed (not as forced)
+    q2 = refine_angles(v, patch, ring)
+    assert q2.inserted == 0 and q2.bad.sum() == 1 and not q2.forced.any()
+    np.testing.assert_array_equal(q2.faces, patch)
