@@ -359,6 +359,29 @@ def _inside(p: NDArray[np.float64], tri: NDArray[np.int64], q: NDArray[np.float6
     return (s > margin) & (t > margin) & (1 - s - t > margin)
 
 
+def _encroached(p: NDArray[np.float64], seg: NDArray[np.int64], x: NDArray[np.float64], *,
+                lens: float = 120.0) -> NDArray[np.bool_]:
+    """(K,) whether each point x[i] lies in the diametral lens of one of the segments ``seg``
+    (S, 2) near it: it sees the segment at an angle above ``lens`` degrees (Shewchuk's lens, 120:
+    a triangle of the segment and x[i] would have an angle below 30 degrees at its other corners).
+    Only the 8 segments with the nearest midpoints are tested; a point in a lens lies in the
+    segment's diametral ball, whose radius bounds the search."""
+    from scipy.spatial import cKDTree
+
+    x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
+    if not len(seg) or not len(x):
+        return np.zeros(len(x), dtype=bool)
+    a, b = p[seg[:, 0]], p[seg[:, 1]]
+    kq = min(8, len(seg))
+    dq, iq = cKDTree((a + b) / 2).query(x, k=kq)
+    dq, iq = dq.reshape(len(x), kq), iq.reshape(len(x), kq)
+    u = a[iq] - x[:, None, :]
+    w = b[iq] - x[:, None, :]
+    ang = np.arctan2(np.linalg.norm(np.cross(u, w), axis=2), np.einsum("ijk,ijk->ij", u, w))
+    inball = dq < np.linalg.norm(a - b, axis=1)[iq] / 2
+    return (inball & (ang > np.radians(lens))).any(axis=1)
+
+
 def _unchangeable(f: NDArray[np.int64], nv: int, fixed: NDArray[np.int64],
                   locked: NDArray[np.int64] | None) -> NDArray[np.bool_]:
     """(M, 3) whether edge k of each patch face (f[:, k] -> f[:, k+1]) can neither split nor flip: a
@@ -425,25 +448,16 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     used = np.unique(f)
     near, _ = cKDTree(p[used]).query(q)
     ok_pt = near > 0.5 * lab  # inside the face, or (below) in a neighbour across an edge at x
-    # Ruppert's encroachment rule for the edges that cannot split: a point inside the diametral
-    # ball of a border / locked edge is not inserted (it would make a flat triangle on that edge)
+    # Ruppert's encroachment rule for the edges that cannot split, with Shewchuk's diametral lens: a
+    # point that sees a border / locked edge at more than 120 degrees is not inserted (it would make
+    # a flat triangle on that edge)
     stuck = _unchangeable(f, len(p), fixed, locked)
     se = np.stack([f[stuck], np.roll(f, -1, axis=1)[stuck]], axis=1)
-    if len(se):
-        sm = (p[se[:, 0]] + p[se[:, 1]]) / 2
-        sr = np.linalg.norm(p[se[:, 0]] - p[se[:, 1]], axis=1) / 2
-        s_tree = cKDTree(sm)
 
-        def encroaches(x: NDArray[np.float64]) -> NDArray[np.bool_]:
-            kq = min(8, len(se))
-            dq, iq = s_tree.query(x.reshape(-1, 3), k=kq)
-            dq, iq = dq.reshape(-1, kq), iq.reshape(-1, kq)
-            return (dq < sr[iq] * (1 - 1e-9)).any(axis=1)
+    def encroaches(x: NDArray[np.float64]) -> NDArray[np.bool_]:
+        return _encroached(p, se, x)
 
-        ok_pt &= ~encroaches(q)
-    else:
-        def encroaches(x: NDArray[np.float64]) -> NDArray[np.bool_]:
-            return np.zeros(len(x.reshape(-1, 3)), dtype=bool)
+    ok_pt &= ~encroaches(q)
     # the fallback: the longest edge of the face that may split (not a border / locked / single edge)
     he = halfedges(f)
     hkey = he[:, 0] * len(p) + he[:, 1]
@@ -589,7 +603,7 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
                   ) -> tuple[NDArray[np.int64], int]:
     """Remove free vertices of the bad faces by collapsing each onto the neighbour that leaves the
     best smallest angle, when that raises the smallest angle of its faces: the vertex a Delaunay
-    refinement could not fix: only a vertex inside the diametral ball of a border edge, which may
+    refinement could not fix: only a vertex inside the diametral lens of a border edge, which may
     not split, so no point can be inserted near it (and moving it did not help). A collapse keeps
     the surface a manifold (the link condition: the two ends share only the two vertices opposite
     their edge), folds no face and never touches a vertex on a border, locked or single edge.
@@ -603,14 +617,8 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
     on_stuck[b] = True
     cand = np.unique(f[bad])
     cand = cand[free[cand] & ~on_stuck[cand]]
-    if len(cand) and len(a):  # only vertices inside the diametral ball of a border / locked edge
-        from scipy.spatial import cKDTree
-
-        mid = (p[a] + p[b]) / 2
-        rad = np.linalg.norm(p[a] - p[b], axis=1) / 2
-        kq = min(8, len(a))
-        dq, iq = cKDTree(mid).query(p[cand], k=kq)
-        cand = cand[(dq.reshape(len(cand), kq) < rad[iq.reshape(len(cand), kq)]).any(axis=1)]
+    if len(cand):  # only vertices in the diametral lens of a border / locked edge
+        cand = cand[_encroached(p, np.stack([a, b], axis=1), p[cand])]
     done = 0
     for c in cand:  # sequential: each collapse changes the stars of the next candidates
         rows = np.flatnonzero((f == c).any(axis=1))
