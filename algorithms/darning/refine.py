@@ -272,7 +272,7 @@ def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed
     target = np.radians(min_angle + margin)
     lk = np.asarray(locked, dtype=np.int64).reshape(-1, 2) if locked is not None and len(locked) else None
     f, _ = relax(p, f, fixed, locked=lk)
-    _, bad, _ = _bad_triangles(p, f, fixed, lk, target)
+    forced, bad, _ = _bad_triangles(p, f, fixed, lk, target)
     P, rest, inserted, rounds = p, np.zeros((0, 3), dtype=np.int64), 0, 0
     if bad.any():
         # only the faces within ``rings`` rings of the bad ones change: the rest of the patch is held
@@ -290,15 +290,16 @@ def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed
         free = np.zeros(len(p), dtype=bool)
         if movable is not None:
             free[np.asarray(movable, dtype=np.int64)] = True
-        P, sub, inserted, rounds = _refine_region(p, f[region], held, lk, free, target,
+        P, sub, inserted, rounds = _refine_region(p, f[region], held, lk, free, target, np.radians(min_angle),
                                                   max_rounds, int(budget * max(len(f), 1)))
-        if _manifold(np.vstack([held, sub])) or not _manifold(np.vstack([held, f[region]])):
-            f = np.vstack([rest, sub])
-        else:  # a safety net: a region that lost its manifold edges is not used
-            P, inserted = p, 0
-    ang = corner_angles(P, f).min(axis=1)
-    forced, bad, _ = _bad_triangles(P, f, fixed, lk, np.radians(min_angle))
-    return AngleRefined(P, f, inserted, forced & (ang < np.radians(min_angle)), bad, rounds)
+        if not _manifold(np.vstack([held, sub])) and _manifold(np.vstack([held, f[region]])):
+            P, inserted, sub = p, 0, f[region]  # a safety net: a region that lost its manifold edges
+        # the rest was not bad (its forced faces stay forced); only the region is measured again
+        forced_sub, bad_sub, _ = _bad_triangles(P, sub, held, lk, np.radians(min_angle))
+        forced_rest = forced[~region] & (corner_angles(p, rest).min(axis=1) < np.radians(min_angle))
+        return AngleRefined(P, np.vstack([rest, sub]), inserted, np.concatenate([forced_rest, forced_sub]),
+                            np.concatenate([np.zeros(len(rest), dtype=bool), bad_sub]), rounds)
+    return AngleRefined(p, f, 0, forced & (corner_angles(p, f).min(axis=1) < np.radians(min_angle)), bad, 0)
 
 
 def _manifold(faces: NDArray[np.int64]) -> bool:
@@ -308,8 +309,8 @@ def _manifold(faces: NDArray[np.int64]) -> bool:
 
 
 def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
-                   lk: NDArray[np.int64] | None, movable: NDArray[np.bool_], target: float, max_rounds: int,
-                   limit: int) -> tuple[NDArray[np.float64], NDArray[np.int64], int, int]:
+                   lk: NDArray[np.int64] | None, movable: NDArray[np.bool_], target: float, strict: float,
+                   max_rounds: int, limit: int) -> tuple[NDArray[np.float64], NDArray[np.int64], int, int]:
     """The rounds of :func:`refine_angles` on one region: smooth, flip, insert, flip. Returns
     (vertices, faces, points inserted, rounds)."""
     P = p.copy()
@@ -322,7 +323,9 @@ def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
         if not bad.any():
             break
         free = np.concatenate([movable, np.ones(len(P) - nv0, dtype=bool)])  # inserted points move too
-        moved = _smooth_bad(P, f, free, np.flatnonzero(bad))
+        # moves only around faces below the bound itself (the margin is for the insertions)
+        below = bad & (corner_angles(P, f).min(axis=1) < strict)
+        moved = _smooth_bad(P, f, free, np.flatnonzero(below)) if below.any() else 0
         if moved:
             f, _ = relax(P, f, fixed, locked=lk)
             _, bad, choice = _bad_triangles(P, f, fixed, lk, target)
@@ -550,8 +553,7 @@ def _smooth_bad(p: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.b
         moved = 0
         for c, s0, s1 in zip(cand, start, stop):
             star = f[order[s0:s1] // 3]
-            nb = np.unique(star)
-            nb = nb[nb != c]
+            nb = star[star != c]  # each neighbour twice (in two faces of the star) unless on its rim
             t = p[star]
             nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
             nn = np.linalg.norm(nrm)
@@ -594,7 +596,10 @@ def _tri_angles(t: NDArray[np.float64]) -> NDArray[np.float64]:
     for k in range(3):
         u = t[..., (k + 1) % 3, :] - t[..., k, :]
         w = t[..., (k + 2) % 3, :] - t[..., k, :]
-        out[..., k] = np.arctan2(np.linalg.norm(np.cross(u, w), axis=-1), np.einsum("...i,...i->...", u, w))
+        c0 = u[..., 1] * w[..., 2] - u[..., 2] * w[..., 1]
+        c1 = u[..., 2] * w[..., 0] - u[..., 0] * w[..., 2]
+        c2 = u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]
+        out[..., k] = np.arctan2(np.sqrt(c0 * c0 + c1 * c1 + c2 * c2), (u * w).sum(axis=-1))
     return out
 
 
