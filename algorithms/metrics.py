@@ -34,6 +34,28 @@ def min_angles(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArr
     return triangle_angles(vertices, faces).min(axis=1)
 
 
+def forced_faces(vertices: NDArray[np.float64], patch: NDArray[np.int64], border_edges: NDArray[np.int64], *,
+                 below: float = 20.0) -> NDArray[np.bool_]:
+    """(P,) whether each patch face's smallest angle (below ``below`` degrees) is **forced** by the
+    input: it lies at a corner between two input border edges (``border_edges`` (E, 2), the edges
+    of the hole borders, i.e. of the input faces used once). Every fill of that hole has that
+    corner's angle, or smaller ones, there (e.g. a hole border corner of 10 degrees), so no patch
+    can avoid it. Every other angle below the bound is unforced."""
+    f = np.asarray(patch, dtype=np.int64).reshape(-1, 3)
+    if not len(f):
+        return np.zeros(0, dtype=bool)
+    e = np.asarray(border_edges, dtype=np.int64).reshape(-1, 2)
+    nv = int(max(f.max(), e.max() if len(e) else 0)) + 1
+    keys = np.unique(np.sort(e, axis=1) @ np.array([nv, 1])) if len(e) else np.zeros(0, np.int64)
+    ang = triangle_angles(vertices, f)
+    k = np.argmin(ang, axis=1)
+    r = np.arange(len(f))
+    x, a, b = f[r, k], f[r, (k + 1) % 3], f[r, (k + 2) % 3]
+    on = (np.isin(np.minimum(x, a) * nv + np.maximum(x, a), keys)
+          & np.isin(np.minimum(x, b) * nv + np.maximum(x, b), keys))
+    return on & (ang[r, k] < below)
+
+
 @dataclass(frozen=True)
 class AngleStats:
     """Summary of per-triangle minimum angles (degrees)."""

@@ -543,8 +543,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         # the patches were darned one by one and the bridge chains moved in the fairing: Delaunay
         # edge flips over all new faces together (input faces fixed) let edges cross the chains
         # (not the crease chains)
-        from .darning import relax
         from .darning.fair import tangential_relax
+        from .darning.refine import refine_angles
 
         # the fairing placed the vertices on a smooth surface but unevenly: even them out along it
         movable = np.setdiff1d(np.arange(n_input, len(V)), keep_still)
@@ -558,8 +558,11 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             V, _ = fit.project(V, moved)
         fixed = F[:n_before]
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
-        patch, _ = relax(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None)
-        F = np.vstack([fixed, patch])
+        # then Delaunay refinement for the angles (darning.refine_angles: flips first, points only
+        # where a triangle stays below the angle bound and is not forced by the border)
+        q = refine_angles(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None,
+                          movable=np.setdiff1d(np.arange(n_input, len(V)), keep_still))
+        V, F = q.vertices, np.vstack([fixed, q.faces])
     timings["darn"] = time.perf_counter() - t0
     new_faces = np.arange(n_before, len(F))
     stages.append(Stage("darned", f"{len(final)} holes darned with {params.darning}: {len(F) - n_before} new faces",

@@ -204,3 +204,461 @@ def _split_obtuse(p: NDArray[np.float64], f: NDArray[np.int64], lab: NDArray[np.
     out = np.vstack([out, np.stack([m, b, c], 1), np.stack([m, a, d], 1)])
     lab = np.concatenate([lab, lab[f1], lab[f2]])
     return out, lab, (p[a] + p[b]) / 2, (lv[a] + lv[b]) / 2
+
+
+@dataclass(frozen=True, eq=False)
+class AngleRefined:
+    """vertices: (V + K, 3), the input vertices then K inserted ones; faces: the patch faces;
+    inserted: K; forced: (M,) whether a face's smallest angle lies between two edges that cannot
+    change (``corner_fixed``), so no refinement can raise it; bad: (M,) faces still below the target
+    that are not forced; rounds: insertion rounds run."""
+
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    inserted: int
+    forced: NDArray[np.bool_]
+    bad: NDArray[np.bool_]
+    rounds: int
+
+
+def corner_angles(p: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
+    """(M, 3) angle at each corner of each face, radians (column k: at f[:, k])."""
+    return np.stack([_angle_at(p, f[:, k], f[:, (k + 1) % 3], f[:, (k + 2) % 3]) for k in range(3)], axis=1)
+
+
+def _fixed_edge_mask(f: NDArray[np.int64], nv: int, keys: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """(M, 3) whether edge k of face i, (f[i, k], f[i, k+1]), has its key (min * nv + max) in ``keys``."""
+    a, b = f, np.roll(f, -1, axis=1)
+    k = np.minimum(a, b) * nv + np.maximum(a, b)
+    return np.isin(k, keys)
+
+
+def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: NDArray[np.int64], *,
+                  min_angle: float = 20.0, margin: float = 2.0, locked: NDArray[np.int64] | None = None,
+                  movable: NDArray[np.int64] | None = None, max_rounds: int = 40, budget: float = 3.0,
+                  rings: int = 3) -> AngleRefined:
+    """Delaunay refinement of a patch for its angles: insert a point into every bad triangle until no
+    triangle has an angle below ``min_angle`` degrees, or only forced ones are left.
+
+    **(choice)**, beyond the spec's refinement (frep.md §4, :func:`refine`, which matches the density
+    of the surroundings but bounds no angle): Chew's / Ruppert's Delaunay refinement with Üngör's
+    off-centres (Üngör 2004, "Off-centers: a new type of Steiner points for computing size-optimal
+    quality-guaranteed Delaunay triangulations"). A triangle (x, a, b) with its smallest angle at x
+    (opposite the shortest edge ab) gets a new point on the perpendicular bisector of ab, in its
+    plane, at the distance that makes (a, b, new) equilateral, or at the circumcentre if that is
+    nearer (it is when the angle at x is above 30 degrees); the point lies in the triangle's
+    circumcircle, so the Delaunay flips that follow (:func:`relax`) remove the triangle. Where that
+    point falls outside the triangle (an obtuse corner at a or b) or too near another vertex, the
+    triangle's longest splittable edge is halved instead (Rivara's bisection). The target is
+    ``min_angle + margin`` so that the flips and the final positions keep the result above
+    ``min_angle``.
+
+    What cannot change: the hole border (edges shared with ``fixed_faces``) and ``locked`` edges
+    (continued creases) are never split nor flipped. A triangle whose smallest angle lies between two
+    such edges is **forced**: every triangulation of the patch has an angle at most that small at
+    that corner (e.g. a hole border corner of 10 degrees), so it is left as it is. A triangle with a
+    zero-length edge (two input vertices at one position, a split non-manifold vertex) is forced
+    too (the copies stay apart in the output; merged, the face vanishes). New points lie in the
+    plane of the triangle they split, so the patch's shape does not change (flips of non-planar
+    quads aside); smoothing moves vertices in their tangent plane only. ``budget``: at most
+    ``budget`` times the patch's faces are inserted (a safety bound; refinement around forced
+    corners stops by the forced test).
+    ``movable``: vertices (besides the inserted ones) that the smoothing may move (new vertices of
+    the patch; never input vertices). ``rings``: how far around the bad faces the patch may change.
+    """
+    p = np.asarray(vertices, dtype=np.float64)
+    f = np.array(patch, dtype=np.int64, copy=True).reshape(-1, 3)
+    fixed = np.asarray(fixed_faces, dtype=np.int64).reshape(-1, 3)
+    target = np.radians(min_angle + margin)
+    lk = np.asarray(locked, dtype=np.int64).reshape(-1, 2) if locked is not None and len(locked) else None
+    f, _ = relax(p, f, fixed, locked=lk)
+    forced, bad, _ = _bad_triangles(p, f, fixed, lk, target)
+    P, rest, inserted, rounds = p, np.zeros((0, 3), dtype=np.int64), 0, 0
+    if bad.any():
+        # only the faces within ``rings`` rings of the bad ones change: the rest of the patch is held
+        # like the fixed faces (its edges next to the region do not flip), so a round costs what the
+        # region costs, not what the whole patch does
+        near = np.zeros(len(p), dtype=bool)
+        near[f[bad]] = True
+        for _ in range(rings):
+            near[f[near[f].any(axis=1)]] = True
+        region = near[f].any(axis=1)
+        rest = f[~region]
+        inside = np.zeros(len(p), dtype=bool)
+        inside[f[region]] = True
+        held = np.vstack([fixed, rest[inside[rest].any(axis=1)]])  # every other face at a region vertex
+        free = np.zeros(len(p), dtype=bool)
+        if movable is not None:
+            free[np.asarray(movable, dtype=np.int64)] = True
+        P, sub, inserted, rounds = _refine_region(p, f[region], held, lk, free, target, np.radians(min_angle),
+                                                  max_rounds, int(budget * max(len(f), 1)))
+        if not _manifold(np.vstack([held, sub])) and _manifold(np.vstack([held, f[region]])):
+            P, inserted, sub = p, 0, f[region]  # a safety net: a region that lost its manifold edges
+        # the rest was not bad (its forced faces stay forced); only the region is measured again
+        forced_sub, bad_sub, _ = _bad_triangles(P, sub, held, lk, np.radians(min_angle))
+        forced_rest = forced[~region] & (corner_angles(p, rest).min(axis=1) < np.radians(min_angle))
+        return AngleRefined(P, np.vstack([rest, sub]), inserted, np.concatenate([forced_rest, forced_sub]),
+                            np.concatenate([np.zeros(len(rest), dtype=bool), bad_sub]), rounds)
+    return AngleRefined(p, f, 0, forced & (corner_angles(p, f).min(axis=1) < np.radians(min_angle)), bad, 0)
+
+
+def _manifold(faces: NDArray[np.int64]) -> bool:
+    """No edge has more than two faces, and no directed edge appears twice."""
+    he = halfedges(faces)
+    return bool(edge_table(faces).counts.max(initial=0) <= 2 and len(np.unique(he, axis=0)) == len(he))
+
+
+def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
+                   lk: NDArray[np.int64] | None, movable: NDArray[np.bool_], target: float, strict: float,
+                   max_rounds: int, limit: int) -> tuple[NDArray[np.float64], NDArray[np.int64], int, int]:
+    """The rounds of :func:`refine_angles` on one region: smooth, flip, insert, flip. Returns
+    (vertices, faces, points inserted, rounds)."""
+    P = p.copy()
+    nv0 = len(p)
+    inserted = rounds = idle = 0
+    while rounds < max_rounds:  # sequential: smooth, flip, insert, measure again
+        rounds += 1
+        f, _ = relax(P, f, fixed, locked=lk)
+        _, bad, choice = _bad_triangles(P, f, fixed, lk, target)
+        if not bad.any():
+            break
+        free = np.concatenate([movable, np.ones(len(P) - nv0, dtype=bool)])  # inserted points move too
+        # moves only around faces below the bound itself (the margin is for the insertions)
+        below = bad & (corner_angles(P, f).min(axis=1) < strict)
+        moved = _smooth_bad(P, f, free, np.flatnonzero(below)) if below.any() else 0
+        if moved:
+            f, _ = relax(P, f, fixed, locked=lk)
+            _, bad, choice = _bad_triangles(P, f, fixed, lk, target)
+            if not bad.any():
+                break
+        new_pts = np.zeros((0, 3))
+        if inserted < limit:
+            new_pts, f = _insert(P, f, fixed, lk, np.flatnonzero(bad), choice, len(P))
+        removed = 0
+        if not len(new_pts):  # Ruppert would split the border edge a free vertex encroaches: remove it
+            # (not the points inserted here: inserting and removing one could alternate for ever)
+            f, removed = _collapse_bad(P, f, fixed, lk, np.r_[movable, np.zeros(len(P) - nv0, dtype=bool)],
+                                       np.flatnonzero(bad))
+        idle = 0 if len(new_pts) or removed else idle + 1
+        if not len(new_pts) and not moved and not removed or idle >= 2:  # two rounds of moves alone: settled
+            break
+        if len(new_pts):
+            P = np.vstack([P, new_pts])
+            inserted += len(new_pts)
+    return P, f, inserted, rounds
+
+
+def _inside(p: NDArray[np.float64], tri: NDArray[np.int64], q: NDArray[np.float64], *,
+            margin: float = 0.02) -> NDArray[np.bool_]:
+    """(K,) whether q[i] projected into the plane of triangle tri[i] lies inside it, every
+    barycentric coordinate above ``margin``."""
+    x, a, b = p[tri[:, 0]], p[tri[:, 1]], p[tri[:, 2]]
+    e0, e1, w = a - x, b - x, q - x
+    d00, d01, d11 = (e0 * e0).sum(1), (e0 * e1).sum(1), (e1 * e1).sum(1)
+    d20, d21 = (w * e0).sum(1), (w * e1).sum(1)
+    den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
+    s = (d11 * d20 - d01 * d21) / den
+    t = (d00 * d21 - d01 * d20) / den
+    return (s > margin) & (t > margin) & (1 - s - t > margin)
+
+
+def _encroached(p: NDArray[np.float64], seg: NDArray[np.int64], x: NDArray[np.float64], *,
+                lens: float = 120.0) -> NDArray[np.bool_]:
+    """(K,) whether each point x[i] lies in the diametral lens of one of the segments ``seg``
+    (S, 2) near it: it sees the segment at an angle above ``lens`` degrees (Shewchuk's lens, 120:
+    a triangle of the segment and x[i] would have an angle below 30 degrees at its other corners).
+    Only the 8 segments with the nearest midpoints are tested; a point in a lens lies in the
+    segment's diametral ball, whose radius bounds the search."""
+    from scipy.spatial import cKDTree
+
+    x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
+    if not len(seg) or not len(x):
+        return np.zeros(len(x), dtype=bool)
+    a, b = p[seg[:, 0]], p[seg[:, 1]]
+    kq = min(8, len(seg))
+    dq, iq = cKDTree((a + b) / 2).query(x, k=kq)
+    dq, iq = dq.reshape(len(x), kq), iq.reshape(len(x), kq)
+    u = a[iq] - x[:, None, :]
+    w = b[iq] - x[:, None, :]
+    ang = np.arctan2(np.linalg.norm(np.cross(u, w), axis=2), np.einsum("ijk,ijk->ij", u, w))
+    inball = dq < np.linalg.norm(a - b, axis=1)[iq] / 2
+    return (inball & (ang > np.radians(lens))).any(axis=1)
+
+
+def _unchangeable(f: NDArray[np.int64], nv: int, fixed: NDArray[np.int64],
+                  locked: NDArray[np.int64] | None) -> NDArray[np.bool_]:
+    """(M, 3) whether edge k of each patch face (f[:, k] -> f[:, k+1]) can neither split nor flip: a
+    hole border edge (an edge of a fixed face), a locked edge, or an edge with one patch face."""
+    keys = []
+    if len(fixed):
+        keys.append(np.sort(halfedges(fixed), axis=1) @ np.array([nv, 1]))
+    if locked is not None:
+        keys.append(np.sort(locked, axis=1) @ np.array([nv, 1]))
+    out = _fixed_edge_mask(f, nv, np.unique(np.concatenate(keys))) if keys else np.zeros(f.shape, dtype=bool)
+    he = np.sort(halfedges(f), axis=1) @ np.array([nv, 1])
+    _, inv, cnt = np.unique(he, return_inverse=True, return_counts=True)
+    return out | (cnt[inv] < 2).reshape(-1, 3)
+
+
+def _bad_triangles(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
+                   locked: NDArray[np.int64] | None, target: float
+                   ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.int64]]:
+    """(forced, bad, corner of the smallest angle) per face; bad = below ``target`` and not forced."""
+    if not len(f):
+        z = np.zeros(0, dtype=bool)
+        return z, z, np.zeros(0, dtype=np.int64)
+    ang = corner_angles(p, f)
+    k = np.argmin(ang, axis=1)
+    small = ang[np.arange(len(f)), k] < target
+    stuck = _unchangeable(f, len(p), fixed, locked)
+    r = np.arange(len(f))
+    # edges at corner k: edge k (f[k] -> f[k+1]) and edge k-1 (f[k-1] -> f[k])
+    corner_fixed = stuck[r, k] & stuck[r, (k + 2) % 3]
+    ln = np.linalg.norm(p[f] - p[np.roll(f, -1, axis=1)], axis=2)
+    glued = (ln <= 1e-12 * max(1.0, float(ln.max()))).any(axis=1)  # two copies of a split non-manifold vertex
+    forced = small & (corner_fixed | glued)
+    return forced, small & ~forced, k
+
+
+def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64], locked: NDArray[np.int64] | None,
+            bad: NDArray[np.int64], corner: NDArray[np.int64], nv: int
+            ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """One round of insertions into the bad faces (worst first, each face used once): off-centre
+    points split their face in three; the fallback halves an edge (both its faces). Returns (new
+    points, faces)."""
+    from scipy.spatial import cKDTree
+
+    ang = corner_angles(p, f[bad]).min(axis=1)
+    bad = bad[np.argsort(ang, kind="stable")]
+    k = corner[bad]
+    r = np.arange(len(bad))
+    x = f[bad, k]
+    a = f[bad, (k + 1) % 3]
+    b = f[bad, (k + 2) % 3]
+    ab = p[b] - p[a]
+    lab = np.linalg.norm(ab, axis=1)
+    mid = (p[a] + p[b]) / 2
+    toward = p[x] - mid
+    ue = ab / np.maximum(lab, 1e-300)[:, None]
+    u = toward - np.einsum("ij,ij->i", toward, ue)[:, None] * ue
+    un = np.linalg.norm(u, axis=1)
+    u /= np.maximum(un, 1e-300)[:, None]
+    theta = corner_angles(p, f[bad])[r, k]
+    # (a, b, q) equilateral, or the circumcentre (distance |ab| / (2 tan theta) from mid) if nearer
+    d = np.minimum(np.sqrt(3) / 2 * lab, lab / (2 * np.tan(np.maximum(theta, 1e-12))))
+    q = mid + d[:, None] * u
+    inside = _inside(p, np.stack([x, a, b], 1), q) & (un > 0)
+    used = np.unique(f)
+    near, _ = cKDTree(p[used]).query(q)
+    ok_pt = near > 0.5 * lab  # inside the face, or (below) in a neighbour across an edge at x
+    # Ruppert's encroachment rule for the edges that cannot split, with Shewchuk's diametral lens: a
+    # point that sees a border / locked edge at more than 120 degrees is not inserted (it would make
+    # a flat triangle on that edge)
+    stuck = _unchangeable(f, len(p), fixed, locked)
+    se = np.stack([f[stuck], np.roll(f, -1, axis=1)[stuck]], axis=1)
+
+    def encroaches(x: NDArray[np.float64]) -> NDArray[np.bool_]:
+        return _encroached(p, se, x)
+
+    ok_pt &= ~encroaches(q)
+    # the fallback: the longest edge of the face that may split (not a border / locked / single edge)
+    he = halfedges(f)
+    hkey = he[:, 0] * len(p) + he[:, 1]
+    order = np.argsort(hkey)
+    taken = np.zeros(len(f), dtype=bool)
+    new: list[NDArray[np.float64]] = []
+    faces = [f]
+    grow: list[NDArray[np.int64]] = []
+    accepted: list[NDArray[np.float64]] = []
+    acc_r: list[float] = []
+    for i in range(len(bad)):  # sequential: a greedy independent set, worst face first (tens of faces)
+        fi = int(bad[i])
+        if taken[fi]:
+            continue
+        host = -1
+        if ok_pt[i] and all(np.linalg.norm(q[i] - c) > rr for c, rr in zip(accepted, acc_r)):
+            if inside[i]:
+                host = fi
+            else:  # an obtuse corner at a or b: the point lies across the edge (x, a) or (b, x)
+                for e in (int(k[i]), (int(k[i]) + 2) % 3):
+                    if stuck[fi, e]:
+                        continue
+                    ea, eb = f[fi, e], f[fi, (e + 1) % 3]
+                    g = int(order[np.searchsorted(hkey[order], eb * len(p) + ea)] // 3)
+                    if not taken[g] and _inside(p, f[g][None], q[i][None])[0]:
+                        host = g
+                        break
+        if host >= 0:
+            taken[fi] = taken[host] = True
+            m = nv + len(new)
+            th = p[f[host]]
+            nh = np.cross(th[1] - th[0], th[2] - th[0])
+            nh /= max(float(np.linalg.norm(nh)), 1e-300)
+            q[i] -= ((q[i] - th[0]) @ nh) * nh  # in the plane of the face it splits
+            new.append(q[i])
+            accepted.append(q[i])
+            acc_r.append(0.5 * float(lab[i]))
+            i0, i1, i2 = f[host]
+            f[host] = (i0, i1, m)
+            grow.append(np.array([[i1, i2, m], [i2, i0, m]]))
+            continue
+        tri = p[f[fi]]
+        el = np.linalg.norm(tri[[1, 2, 0]] - tri, axis=1)
+        el[stuck[fi]] = -1
+        e = int(np.argmax(el))
+        if el[e] <= 0:
+            continue
+        ea, eb = f[fi, e], f[fi, (e + 1) % 3]
+        j = order[np.searchsorted(hkey[order], eb * len(p) + ea)]
+        g = int(j // 3)
+        mp = (p[ea] + p[eb]) / 2
+        if taken[g] or encroaches(mp)[0] or any(np.linalg.norm(mp - c) <= rr for c, rr in zip(accepted, acc_r)):
+            continue
+        taken[fi] = taken[g] = True
+        m = nv + len(new)
+        new.append(mp)
+        accepted.append(mp)
+        acc_r.append(0.25 * float(el[e]))
+        c = f[fi, (e + 2) % 3]
+        dd = f[g, (j % 3 + 2) % 3]
+        f[fi] = (ea, m, c)
+        f[g] = (eb, m, dd)
+        grow.append(np.array([[m, eb, c], [m, ea, dd]]))
+    if not new:
+        return np.zeros((0, 3)), f
+    return np.asarray(new), np.vstack(faces + grow)
+
+
+def _smooth_bad(p: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.bool_], bad: NDArray[np.int64],
+                *, tries: int = 3, gain: float = np.radians(0.1)) -> int:
+    """Move the free vertices of the bad faces, in place, to raise the smallest angle of their faces
+    (smart Laplacian smoothing, in the vertex's tangent plane): candidates are the umbrella step
+    towards the centroid of the neighbours (fair.tangential_relax's step) and, for the face of the
+    star with the smallest angle, the apex of the equilateral triangle on its edge opposite the
+    vertex, each at full, half and quarter length; the best candidate that raises the star's
+    smallest angle by more than ``gain`` (radians) without folding a face is kept. A free vertex near
+    a fixed edge, where no point may be inserted (the encroachment rule of :func:`_insert`), can
+    only be moved. Returns the number of moves kept."""
+    cand = np.unique(f[bad])
+    cand = cand[free[cand]]
+    if not len(cand):
+        return 0
+    order = np.argsort(f.ravel(), kind="stable")
+    flat = f.ravel()[order]
+    start = np.searchsorted(flat, cand)
+    stop = np.searchsorted(flat, cand, side="right")
+    kept = 0
+    steps = np.array([1.0, 0.5, 0.25])
+    for _ in range(tries):  # sequential: each vertex moves against its neighbours' current positions
+        moved = 0
+        for c, s0, s1 in zip(cand, start, stop):
+            star = f[order[s0:s1] // 3]
+            nb = star[star != c]  # each neighbour twice (in two faces of the star) unless on its rim
+            t = p[star]
+            nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
+            nn = np.linalg.norm(nrm)
+            if not len(nb) or nn == 0:
+                continue
+            nrm /= nn
+            ang = _tri_angles(t)
+            before = ang.min()
+            # the face with the smallest angle: the equilateral apex on its edge opposite c
+            w = star[int(np.argmin(ang.min(axis=1)))]
+            kc = int(np.flatnonzero(w == c)[0])
+            ea, eb = p[w[(kc + 1) % 3]], p[w[(kc + 2) % 3]]
+            e = eb - ea
+            side = np.cross(nrm, e)
+            side /= max(float(np.linalg.norm(side)), 1e-300)
+            if side @ (p[c] - (ea + eb) / 2) < 0:
+                side = -side
+            apex = (ea + eb) / 2 + np.sqrt(3) / 2 * float(np.linalg.norm(e)) * side
+            dl = np.stack([p[nb].mean(axis=0) - p[c], apex - p[c]])
+            dl -= (dl @ nrm)[:, None] * nrm
+            trial = p[c] + (steps[None, :, None] * dl[:, None, :]).reshape(-1, 3)  # (6, 3)
+            tt = np.broadcast_to(t, (len(trial),) + t.shape).copy()
+            tt[:, star == c] = trial[:, None, :]
+            n2 = np.cross(tt[:, :, 1] - tt[:, :, 0], tt[:, :, 2] - tt[:, :, 0])
+            score = _tri_angles(tt).min(axis=(1, 2))
+            score[((n2 @ nrm) <= 0).any(axis=1)] = -1.0  # a fold
+            b = int(np.argmax(score))
+            if score[b] > before + gain:
+                p[c] = trial[b]
+                moved += 1
+        kept += moved
+        if not moved:
+            break
+    return kept
+
+
+def _tri_angles(t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(..., 3) corner angles (radians) of triangles given as (..., 3, 3) corner positions."""
+    out = np.empty(t.shape[:-1])
+    for k in range(3):
+        u = t[..., (k + 1) % 3, :] - t[..., k, :]
+        w = t[..., (k + 2) % 3, :] - t[..., k, :]
+        c0 = u[..., 1] * w[..., 2] - u[..., 2] * w[..., 1]
+        c1 = u[..., 2] * w[..., 0] - u[..., 0] * w[..., 2]
+        c2 = u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]
+        out[..., k] = np.arctan2(np.sqrt(c0 * c0 + c1 * c1 + c2 * c2), (u * w).sum(axis=-1))
+    return out
+
+
+def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
+                  locked: NDArray[np.int64] | None, free: NDArray[np.bool_], bad: NDArray[np.int64]
+                  ) -> tuple[NDArray[np.int64], int]:
+    """Remove free vertices of the bad faces by collapsing each onto the neighbour that leaves the
+    best smallest angle, when that raises the smallest angle of its faces: the vertex a Delaunay
+    refinement could not fix: only a vertex inside the diametral lens of a border edge, which may
+    not split, so no point can be inserted near it (and moving it did not help). A collapse keeps
+    the surface a manifold (the link condition: the two ends share only the two vertices opposite
+    their edge), folds no face and never touches a vertex on a border, locked or single edge.
+    Returns (faces,
+    collapses); the removed vertex stays in ``p``, unreferenced."""
+    stuck = _unchangeable(f, len(p), fixed, locked)
+    nv = len(p)
+    a, b = f[stuck], np.roll(f, -1, axis=1)[stuck]
+    on_stuck = np.zeros(nv, dtype=bool)
+    on_stuck[a] = True
+    on_stuck[b] = True
+    cand = np.unique(f[bad])
+    cand = cand[free[cand] & ~on_stuck[cand]]
+    if len(cand):  # only vertices in the diametral lens of a border / locked edge
+        cand = cand[_encroached(p, np.stack([a, b], axis=1), p[cand])]
+    done = 0
+    for c in cand:  # sequential: each collapse changes the stars of the next candidates
+        rows = np.flatnonzero((f == c).any(axis=1))
+        if not len(rows):
+            continue
+        star = f[rows]
+        t = p[star]
+        n_old = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        before = corner_angles(p, star).min()
+        ring = set(np.unique(star).tolist()) - {int(c)}
+        best = None
+        for u in ring:
+            both = (star == u).any(axis=1)
+            if both.sum() != 2:
+                continue
+            opp = set(np.unique(star[both]).tolist()) - {int(c), u}
+            nu = set(np.unique(f[(f == u).any(axis=1)]).tolist())
+            nu |= set(np.unique(fixed[(fixed == u).any(axis=1)]).tolist())  # and among the fixed faces
+            nu -= {u}
+            if nu & ring != opp:
+                continue  # the link condition
+            nf = star[~both].copy()
+            nf[nf == c] = u
+            t2 = p[nf]
+            n_new = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
+            if (np.einsum("ij,ij->i", n_new, n_old[~both]) <= 0).any():
+                continue  # a fold
+            m = corner_angles(p, nf).min()
+            if m > before and (best is None or m > best[0]):
+                best = (m, both, nf)
+        if best is None:
+            continue
+        _, both, nf = best
+        f = f.copy()
+        f[rows[~both]] = nf
+        f = np.delete(f, rows[both], axis=0)
+        done += 1
+    return f, done

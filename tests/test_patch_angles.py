@@ -1,0 +1,115 @@
+"""Patch angles after the Delaunay refinement (darning.refine.refine_angles) and the forced-angle
+classification of the repair benchmark (metrics.forced_faces)."""
+
+import numpy as np
+
+from algorithms.cases import cap, cut, icosphere
+from algorithms.darning import triangulate
+from algorithms.darning.refine import corner_angles, refine_angles
+from algorithms.metrics import forced_faces, triangle_angles
+from algorithms.normalize import normalize
+from algorithms.repair import repair
+from algorithms.topology import edge_table
+
+
+def teardrop_hole(tip_deg: float):
+    """A flat hole whose border has one corner of ``tip_deg`` degrees (at vertex 0, the origin):
+    two straight sides of length 1, sampled finer towards the tip (edge length about the wedge's
+    width there), closed by a round bulb; with a ring of fixed faces around it. Returns (vertices,
+    ring faces, hole loop)."""
+    h = np.radians(tip_deg) / 2
+    s = np.geomspace(0.05, 1.0, 22)
+    lower = np.c_[s * np.cos(h), -s * np.sin(h)]
+    cx = 1.5
+    a0 = np.arctan2(np.sin(h), np.cos(h) - cx)  # the angle of the upper side's end seen from (cx, 0)
+    rho = np.hypot(np.cos(h) - cx, np.sin(h))
+    t = np.linspace(-a0, a0, 22)[1:-1]  # from the lower side's end round the far side
+    bulb = np.c_[cx + rho * np.cos(t), rho * np.sin(t)]
+    upper = lower[::-1] * np.array([1, -1])
+    inner = np.vstack([[0.0, 0.0], lower, bulb, upper])
+    c = np.array([0.9, 0.0])
+    outer = c + 1.6 * (inner - c)
+    n = len(inner)
+    v = np.c_[np.vstack([inner, outer]), np.zeros(2 * n)]
+    i = np.arange(n)
+    j = (i + 1) % n
+    ring = np.vstack([np.stack([i, n + i, n + j], 1), np.stack([i, n + j, j], 1)])
+    return v, ring, i
+
+
+def test_only_the_forced_corner_stays_below_15_degrees():
+    v, ring, lp = teardrop_hole(10.0)
+    patch = lp[triangulate(v[lp], weight="area")]
+    before = corner_angles(v, patch).min()
+    q = refine_angles(v, patch, ring)
+    ang = triangle_angles(q.vertices, q.faces)
+    border = edge_table(ring).edges[edge_table(ring).counts == 1]
+    inner_border = border[(border < len(lp)).all(axis=1)]
+    forced = forced_faces(q.vertices, q.faces, inner_border)
+    # exactly one forced triangle: the one filling the 10 degree corner, with that angle
+    assert forced.sum() == 1 == q.forced.sum()
+    assert np.isclose(ang[forced].min(), 10.0, atol=1e-6)
+    assert 0 in q.faces[forced][0]
+    # every other angle is at least 20 degrees (it was far below before)
+    assert np.degrees(before) < 5
+    assert ang[~forced].min() >= 20.0
+    assert not q.bad.any()
+    # the patch covers the hole exactly: its area is the polygon's (shoelace), nothing folded
+    x, y = v[lp, 0], v[lp, 1]
+    poly_area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    t = q.vertices[q.faces]
+    signed = 0.5 * np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])[:, 2]
+    assert np.all(np.sign(signed) == np.sign(signed[0]))
+    assert np.isclose(abs(signed.sum()), poly_area, rtol=1e-9)
+    # the border is kept: every hole border edge is still a patch edge, no input vertex moved
+    et = edge_table(q.faces)
+    keys = set(map(tuple, np.sort(et.edges, axis=1)))
+    assert all(tuple(sorted((a, b))) in keys for a, b in zip(lp, np.roll(lp, -1)))
+    np.testing.assert_array_equal(q.vertices[: len(v)], v)
+
+
+def test_forced_faces_needs_two_border_edges_at_the_small_corner():
+    v = np.array([[0, 0, 0], [1, np.tan(np.radians(5)), 0], [1, -np.tan(np.radians(5)), 0.0]])
+    f = np.array([[0, 1, 2]])
+    assert forced_faces(v, f, np.array([[0, 1], [2, 0]])).tolist() == [True]
+    assert forced_faces(v, f, np.array([[0, 1], [1, 2]])).tolist() == [False]  # one border edge at the tip
+    assert forced_faces(v, f, np.array([[0, 1], [2, 0]]), below=5.0).tolist() == [False]  # 10 deg is not < 5
+
+
+def test_hole_on_a_sphere_has_no_patch_angle_below_20_degrees():
+    truth = icosphere(3)
+    case = cut(truth, cap(truth, np.array([0.3, 0.2, 1.0]), 40.0), name="sphere-hole", description="")
+    model = normalize(case.incomplete.vertices, case.incomplete.faces)
+    res = repair(model)
+    patch = res.mesh.faces[res.new_faces]
+    assert len(patch) > 20
+    ang = triangle_angles(res.mesh.vertices, patch)
+    assert ang.min() >= 20.0
+    t = res.report()["output"]
+    assert t["watertight"] and t["genus"] == 0
+
+
+def test_free_vertex_on_a_border_edge_is_moved_or_removed():
+    # a unit square hole with a ring around it; the patch is a fan around a free vertex that sits
+    # almost on the bottom border edge (a 178 degree cap there, a 1 degree angle at each corner)
+    sq = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    out = np.array([[-1, -1, 0], [2, -1, 0], [2, 2, 0], [-1, 2, 0]], dtype=float)
+    v = np.vstack([sq, out, [[0.5, 0.01, 0.0]]])
+    i = np.arange(4)
+    j = (i + 1) % 4
+    ring = np.vstack([np.stack([i, 4 + i, 4 + j], 1), np.stack([i, 4 + j, j], 1)])
+    patch = np.stack([j, i, np.full(4, 8)], 1)
+    assert triangle_angles(v, patch).min() < 2
+    q = refine_angles(v, patch, ring, movable=np.array([8]))
+    ang = triangle_angles(q.vertices, q.faces)
+    assert ang.min() >= 20.0 and not q.bad.any() and not q.forced.any()
+    np.testing.assert_array_equal(q.vertices[:8], v[:8])
+    t = q.vertices[q.faces]
+    assert np.isclose(abs(0.5 * np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])[:, 2].sum()), 1.0)
+    np.testing.assert_allclose(q.vertices[8], [0.5, 0.5, 0.0], atol=1e-12)  # moved to the centre
+    # the same patch with the vertex held (not movable, e.g. a crease chain's): no point may go into
+    # the diametral ball of the bottom edge (Ruppert's rule), nor can the held vertex be collapsed,
+    # so the cap stays and is reported as not fixed (not as forced)
+    q2 = refine_angles(v, patch, ring)
+    assert q2.inserted == 0 and q2.bad.sum() == 1 and not q2.forced.any()
+    np.testing.assert_array_equal(q2.faces, patch)
