@@ -192,11 +192,18 @@ def peers() -> dict[str, tuple[Peer, str]]:
 
 # ---------------------------------------------------------------- running
 
+REPEAT_BELOW = 20.0  # seconds: runs shorter than this are timed twice
+
+
 def _child(fn: Peer, V, F, P, conn) -> None:  # pragma: no cover - runs in the forked child
     try:
         t = time.perf_counter()
         V2, F2 = fn(V, F, P)
         dt = time.perf_counter() - t
+        if dt < REPEAT_BELOW:  # the better of two runs, for every peer alike (the machine is shared)
+            t = time.perf_counter()
+            fn(V, F, P)
+            dt = min(dt, time.perf_counter() - t)
         conn.send(("ok", np.asarray(V2, float), np.asarray(F2, np.int64).reshape(-1, 3), dt))
     except Skip as e:
         conn.send(("skip", str(e)))
@@ -405,7 +412,9 @@ def markdown(rows: list[dict], cases: list[BenchCase], notes: list[str], samples
         f"{samples} samples a side, in % of the truth's bounding-box diagonal; patch = output faces that are "
         "not input faces (min angle, share of patch triangles with a min angle below 20°); time = the tool's "
         "call only (ours includes normalisation and loading numba's cached kernels; they are compiled into the "
-        "cache by a warm-up run before any timing, as an installed copy would have them).",
+        "cache by a warm-up run before any timing, as an installed copy would have them); every tool's call "
+        f"shorter than {REPEAT_BELOW:g} s is timed twice in its child process and the better time kept (the "
+        "machine is shared).",
         "",
         case_lines,
         "",
