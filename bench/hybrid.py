@@ -156,9 +156,9 @@ VARIANTS = (("border at the tolerance", {}),
 
 
 # ---- the runs ----------------------------------------------------------------------------------------------
-def tune(run, target: int, x0: float, power: float, tries: int = 6):
-    """Run with parameter x until the triangle count is within 10 % of target: the count goes about as
-    x^power (power -2 for a length, -1 for a chordal tolerance), refined by a secant in log-log."""
+def tune(run, target: int, x0: float, power: float, tries: int = 6, tol: float = 0.1):
+    """Run with parameter x until the triangle count is within tol (10 %) of target: the count goes about
+    as x^power (power -2 for a length, -1 for a chordal tolerance), refined by a secant in log-log."""
     x = x0
     best = None
     seen: list[tuple[float, float]] = []
@@ -167,7 +167,7 @@ def tune(run, target: int, x0: float, power: float, tries: int = 6):
         n = max(res[1], 1)
         if best is None or abs(n - target) < abs(best[1] - target):
             best = res
-        if abs(n - target) <= 0.1 * target:
+        if abs(n - target) <= tol * target:
             break
         seen.append((math.log(x), math.log(n)))
         slope = power
@@ -217,8 +217,8 @@ def main(argv=None) -> int:
                 "in the same run, rather than the absolute times.\n\n" + table(headers, rows)
                 + "\n\nRatios ours / Gmsh at the same triangle count (chordal max: below 0.5 is the issue's target; "
                 "where Gmsh's count is more than 10 % off ours, as at 1k on the interstage, whose curves Gmsh cannot "
-                "cut coarser, ours is re-run at Gmsh's count for that ratio: last column; time: ours over Gmsh's "
-                "meshing call, at the target):\n\n" + table(rheaders, ratios))
+                "cut coarser, ours is re-run at Gmsh's count (within 3 %) for that ratio: last column; time: ours "
+                "over Gmsh's meshing call, at the target):\n\n" + table(rheaders, ratios))
         if not args.no_doc:
             write_section("hybrid", body)
 
@@ -239,7 +239,9 @@ def main(argv=None) -> int:
                     return (r, len(r.faces), time.perf_counter() - t0, eps)
 
                 def run_ours(count, variant=variant, ours=ours, label_extra=""):
-                    r, n, dt, eps = tune(ours, count, 2.0 * size / count, -1.0)
+                    # at Gmsh's count (a re-run): within 3 %, tighter than the 10 % of the targets
+                    r, n, dt, eps = tune(ours, count, 2.0 * size / count, -1.0, tries=8,
+                                         tol=0.03 if label_extra else 0.1)
                     dt = min(dt, ours(eps)[2])  # the better of two timings: the machine is shared
                     st = r.stats_after
                     cmax, cmean = chordal(surf, r.points, r.faces)
