@@ -182,6 +182,8 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
             if k:
                 s2 = np.concatenate([scale, np.full(len(P) - nv, np.nan)])  # new vertices: the loop's mean
                 r = refine(P, every, pf, density=density, scale=s2)
+                if not r.splits and not r.flips:
+                    break  # the faired patch needs no new vertex: fairing it again changes little
                 P, pf = r.vertices, r.faces
                 splits += r.splits
                 flips += r.flips
