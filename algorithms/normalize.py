@@ -234,7 +234,11 @@ def normalize(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
     ids = np.flatnonzero(alive)
     if len(ids):
         key = np.sort(f[ids], axis=1)
-        _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+        if nv < 2_000_000:  # one int64 per face (a row-wise unique sorts far slower)
+            key = (key[:, 0] * nv + key[:, 1]) * nv + key[:, 2]
+            _, inv, cnt = np.unique(key, return_inverse=True, return_counts=True)
+        else:
+            _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
         inv = inv.ravel()
         dup = cnt[inv] > 1
         if dup.any():
@@ -271,7 +275,8 @@ def normalize(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
         n_isl, lab = islands(f_split[ids])
         size = np.bincount(lab, minlength=n_isl)
         # (original vertex, island) pairs; only vertices shared by two or more islands matter
-        pairs = np.unique(np.stack([vertex_origin[f_split[ids]].ravel(), np.repeat(lab, 3)], axis=1), axis=0)
+        code = np.unique(vertex_origin[f_split[ids]].ravel().astype(np.int64) * n_isl + np.repeat(lab, 3))
+        pairs = np.stack([code // n_isl, code % n_isl], axis=1)
         shared = np.flatnonzero(np.bincount(pairs[:, 0]) > 1)
         n_alive = int(alive.sum())
         for vo in shared.tolist():
