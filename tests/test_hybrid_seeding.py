@@ -46,7 +46,8 @@ def test_no_lattice_where_the_parameter_lines_are_not_straight_lines_of_curvatur
 def test_bezier_patches_are_not_seeded():
     for name in ("bezier-hole", "dome"):
         spec = load_spec(demo(name, "hybrid").path)
-        assert len(seed_points(spec.model, 1e-3 * spec.model.surface.size)[0]) == 0
+        lattice, h = principal_lattice(spec.model, 1e-3 * spec.model.surface.size)
+        assert len(lattice) == 0 and len(seed_points(spec.model, lattice, h, np.zeros((0, 2, 2)))) == 0
 
 
 def test_seeded_interstage_keeps_every_bound_with_fewer_triangles():

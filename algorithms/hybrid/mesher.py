@@ -17,7 +17,7 @@ from .coarsen import coarsen_pass
 from .flips import flip_pass
 from .model import HybridModel
 from .refine import RefineParams, Refiner, RefineStats
-from .seeding import seed_points
+from .seeding import principal_lattice, seed_points
 from .smooth import smooth as smooth_pass
 
 COARSEN_PASSES = 8  # at most; each followed by a flip and a smoothing pass
@@ -244,11 +244,11 @@ def mesh_hybrid(model: HybridModel, params: HybridParams | None = None) -> Hybri
     if p.refine:
         ref = Refiner(tri, p.refine_params(), corners=set(corners.tolist()))
         if p.seed and p.max_deviation is not None:  # (choice) lines-of-curvature seeding, seeding.py
-            _pts, h = seed_points(model, p.max_deviation, max_edge=p.max_edge)
-            if len(_pts):
+            lattice, h = principal_lattice(model, p.max_deviation, max_edge=p.max_edge)
+            if len(lattice):
                 ref.split_long_segments(1.5 * h)  # short border edges first: the seeds may come close to them
                 segs = np.array([[tri.uv[a], tri.uv[b]] for _k, a, b in tri.seg.values()], dtype=np.float64)
-                seeded = ref.seed(seed_points(model, p.max_deviation, segs.reshape(-1, 2, 2), max_edge=p.max_edge)[0])
+                seeded = ref.seed(seed_points(model, lattice, h, segs.reshape(-1, 2, 2)))
         stats = ref.run()  # Stage III
     times["stage3_refine"] = time.perf_counter() - t0
     t0 = time.perf_counter()

@@ -121,18 +121,16 @@ def principal_lattice(model: HybridModel, max_deviation: float, *, fill: float =
     return P, h
 
 
-def seed_points(model: HybridModel, max_deviation: float, segments_uv: NDArray[np.float64] | None = None, *,
-                fill: float = FILL, base_angle: float = BASE_ANGLE, max_edge: float | None = None
-                ) -> tuple[NDArray[np.float64], float]:
-    """The lattice points inside the trim (W > 0) and at least 0.75 of the spacing away (in space) from
-    the border segments segments_uv (S, 2, 2) (sampled 16 times each): ((K, 2) in (u, v), the lattice's
-    largest column spacing in space)."""
+def seed_points(model: HybridModel, lattice: NDArray[np.float64], h: float,
+                segments_uv: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The points of a lattice (principal_lattice: points, largest column spacing h) inside the trim
+    (F > 0) and at least 0.75 h away (in space) from the border segments segments_uv (S, 2, 2)
+    (sampled 16 times each); (K, 2) in (u, v)."""
     from scipy.spatial import cKDTree
 
-    P, h = principal_lattice(model, max_deviation, fill=fill, base_angle=base_angle, max_edge=max_edge)
-    if not len(P) or segments_uv is None:
-        return P, h
-    X = model.surface(P[:, 0], P[:, 1])
+    if not len(lattice):
+        return lattice
+    X = model.surface(lattice[:, 0], lattice[:, 1])
     keep = model.F(X) > 0
     if len(segments_uv):
         w = np.linspace(0.0, 1.0, 16)[None, :, None]
@@ -140,4 +138,4 @@ def seed_points(model: HybridModel, max_deviation: float, segments_uv: NDArray[n
         B = model.surface(S[..., 0], S[..., 1]).reshape(-1, 3)
         dist, _ = cKDTree(B).query(X)
         keep &= dist > 0.75 * h
-    return P[keep], h
+    return lattice[keep]
