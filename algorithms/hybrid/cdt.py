@@ -499,3 +499,13 @@ class Triangulation:
 
     def border_vertices(self) -> NDArray[np.int64]:
         return np.unique(np.array([[s[1], s[2]] for s in self.seg.values()], dtype=np.int64).ravel())
+
+    def interior_mask(self, faces: NDArray[np.int64], only: NDArray[np.bool_] | None = None) -> NDArray[np.bool_]:
+        """(V,) the vertices of `faces` not on a border segment (the ones the finishing passes may move
+        or remove), restricted to the mask `only` when given."""
+        m = np.zeros(len(self.uv), dtype=bool)
+        m[np.unique(faces)] = True
+        m[self.border_vertices()] = False
+        if only is not None:
+            m &= only[:len(m)]
+        return m

@@ -91,18 +91,13 @@ def coarsen_pass(tri: Triangulation, *, min_angle: float, max_deviation: float |
     pass found no admissible collapse for it has none still. median_floor: (degrees) collapses are
     taken only while at most half the triangles have a smallest angle below this (or, where more
     have already, while that share does not grow), so the median minimum angle stays above it."""
-    ids = np.flatnonzero(np.array(tri.alive, dtype=bool))
-    if not len(ids):
+    faces = tri.faces()
+    if not len(faces):
         return 0, np.zeros(len(tri.uv), dtype=bool)
-    faces = np.array(tri.tv, dtype=np.int64)[ids]
     n = len(tri.uv)
     uv = np.array(tri.uv, dtype=np.float64)
     p3 = np.array(tri.p3, dtype=np.float64)
-    movable = np.zeros(n, dtype=bool)
-    movable[np.unique(faces)] = True
-    movable[tri.border_vertices()] = False
-    if only is not None:
-        movable &= only[:n]
+    movable = tri.interior_mask(faces, only)
     # only vertices whose triangles have slack: a collapse grows them (about 1.5 times in area)
     if max_deviation is not None:
         fan_err = np.zeros(n)
@@ -216,11 +211,11 @@ def coarsen_pass(tri: Triangulation, *, min_angle: float, max_deviation: float |
         old_low = np.where(mid, low_fan[cv] + low_fan[cw] - shared, low_fan[cv])
         delta = np.bincount(owner, ang < median_floor, minlength=nc).astype(np.int64) - old_low
         n_low, n_tri = int(low.sum()), len(faces)
-    nb: list[set[int]] = [set() for _ in range(n)]
-    for a, b, c in faces.tolist():
-        nb[a].update((b, c))
-        nb[b].update((a, c))
-        nb[c].update((a, b))
+    tv = tri.tv
+
+    def star(x: int) -> list[int]:  # x and its neighbours: the vertices of its fan
+        return [y for t in tri.fan(x) for y in tv[t]]
+
     locked = np.zeros(n, dtype=bool)
     done = 0
     for c in best.tolist():
@@ -232,12 +227,11 @@ def coarsen_pass(tri: Triangulation, *, min_angle: float, max_deviation: float |
                 continue
             n_low += int(delta[c])
             n_tri -= 2
+        # every vertex whose triangles change: v's star, and w's too when w moves
+        locked[star(v) + (star(w) if mid[c] else [])] = True
         tri.collapse(v, w)
-        locked[v] = True
-        locked[list(nb[v])] = True
         if mid[c]:
             tri.uv[w] = (float(tuv[c, 0]), float(tuv[c, 1]))
             tri.p3[w] = (float(tp3[c, 0]), float(tp3[c, 1]), float(tp3[c, 2]))
-            locked[list(nb[w])] = True
         done += 1
     return done, locked

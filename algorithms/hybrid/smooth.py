@@ -75,11 +75,7 @@ def smooth(tri: Triangulation, *, passes: int = 2, max_deviation: float | None =
     n = len(tri.uv)
     uv = np.array(tri.uv, dtype=np.float64)
     p3 = np.array(tri.p3, dtype=np.float64)
-    movable = np.zeros(n, dtype=bool)
-    movable[np.unique(faces)] = True
-    movable[tri.border_vertices()] = False
-    if only is not None:
-        movable &= only[:n]
+    movable = tri.interior_mask(faces, only)
     e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
     key = np.unique(e[:, 0] * n + e[:, 1])  # the edges, once each
     edges = np.stack([key // n, key % n], axis=1)
