@@ -560,8 +560,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
         # then Delaunay refinement for the angles (darning.refine_angles: flips first, points only
         # where a triangle stays below the angle bound and is not forced by the border)
-        q = refine_angles(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None,
-                          movable=np.setdiff1d(np.arange(n_input, len(V)), keep_still))
+        q = refine_angles(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None, movable=movable)
         V, F = q.vertices, np.vstack([fixed, q.faces])
     timings["darn"] = time.perf_counter() - t0
     new_faces = np.arange(n_before, len(F))
