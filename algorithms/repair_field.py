@@ -75,19 +75,29 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     bvh = mesh_bvh(model.mesh) if params.shielding and model.mesh.n_faces else None
     every: list[ForceLine] = []
     from_loop: dict[int, list[tuple[int, ForceLine]]] = {}
-    for k in loop_ids:
+    lcs = [float(params.lc) if params.lc is not None else max(loop_radius(frames[k]), lc_inter) for k in loop_ids]
+    wins = [int(round(exclude_fraction * len(frames[k].vertices))) for k in loop_ids]
+    # H at every loop point: light mode in one call with an L_c per point (the same values as one
+    # call per loop, without a parallel kernel launch per loop); full mode per loop (its free
+    # points and pruning depend on L_c)
+    batched = _loop_fields(src, frames, loop_ids, params, lcs, wins) if params.mode != "full" else None
+    for idx, k in enumerate(loop_ids):
         fr = frames[k]
         n = len(fr.vertices)
-        lc = float(params.lc) if params.lc is not None else max(loop_radius(fr), lc_inter)
+        lc = lcs[idx]
         p = replace(params, lc=lc, step=params.step if params.step is not None else params.step_factor * lc)
         fp = (free_points(model.free_points, kt=p.kt, rc=p.rc_factor * lc, kernel=p.g_kernel)
               if p.use_free_points and len(model.free_points) else None)
-        win = int(round(exclude_fraction * n))
+        win = wins[idx]
         mine = src.loop == k
-        ev = IndicatorField(src, p, lc, bvh=bvh, free=fp).evaluate(
-            fr.points, x_vertex=fr.vertices, x_loop=np.full(n, k), x_pos=np.arange(n), x_window=np.full(n, win))
-        nrm, ten = top_normal(ev.H, fr.tangent, fr.normal)  # (16a)
-        f = np.einsum("nij,nj->ni", ev.H, nrm)
+        if batched is not None:
+            Hk = batched[idx]
+        else:
+            Hk = IndicatorField(src, p, lc, bvh=bvh, free=fp).evaluate(
+                fr.points, x_vertex=fr.vertices, x_loop=np.full(n, k), x_pos=np.arange(n),
+                x_window=np.full(n, win)).H
+        nrm, ten = top_normal(Hk, fr.tangent, fr.normal)  # (16a)
+        f = np.einsum("nij,nj->ni", Hk, nrm)
         omega = np.where((f * fr.outward).sum(axis=1) > 0, ten, 0.0)  # attraction index
         mx = local_maxima(omega)
         starts = [int(i) for i in mx[np.argsort(-omega[mx])][:starts_per_loop]]
@@ -134,6 +144,22 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
             notes.append(f"loops {a} and {b}: {len(ab) + len(ba)} lines join them, "
                          f"{'a tunnel' if ok else ('forced' if force else 'beaten by lines across their own holes')}")
     return LineSet(lc_inter, tuple(chosen), tuple(every), "; ".join(notes))
+
+
+def _loop_fields(src, frames: list[LoopFrame], loop_ids: list[int], params: FieldParams, lcs: list[float],
+                 wins: list[int]) -> list[np.ndarray]:
+    """Light mode: H (n_k, 3, 3) at the points of each loop k of ``loop_ids`` against the sources
+    ``src`` (each point excluding its own loop's window of ``wins[k]`` positions), with the loop's
+    L_c ``lcs[k]``, all loops in one evaluation (IndicatorField.evaluate's per-point L_c)."""
+    fr = [frames[k] for k in loop_ids]
+    sizes = [len(f.vertices) for f in fr]
+    cat = np.concatenate
+    x = cat([f.points for f in fr])
+    ev = IndicatorField(src, replace(params, lc=lcs[0]), lcs[0]).evaluate(
+        x, x_vertex=cat([f.vertices for f in fr]), x_loop=cat([np.full(n, k) for n, k in zip(sizes, loop_ids)]),
+        x_pos=cat([np.arange(n) for n in sizes]), x_window=cat([np.full(n, w) for n, w in zip(sizes, wins)]),
+        x_lc=cat([np.full(n, lc) for n, lc in zip(sizes, lcs)]))
+    return np.split(ev.H, np.cumsum(sizes)[:-1])
 
 
 def split_line(model: Icadm, frame: LoopFrame, params: FieldParams, *, cancel: Callable[[], bool] | None = None,

@@ -90,18 +90,15 @@ def _q1(l2, lc2, kernel):
     return 1.0 / (1.0 + l2 / lc2)
 
 
-@numba.njit(cache=True)
-def _excluded(i, j, xgrp, xloop, xpos, xwin, sgrp, sloop, spos, slen):
-    """Is source j excluded for point i: the same group (its own island), or on the point's own
-    loop within its window of positions (hole splitting, tunnels)?"""
-    if sgrp[j] == xgrp[i]:
-        return True
-    if xwin[i] >= 0 and sloop[j] == xloop[i]:
-        dp = abs(spos[j] - xpos[i])
-        dp = min(dp, slen[j] - dp)
-        if dp <= xwin[i]:
-            return True
-    return False
+@numba.njit(cache=True, inline="always")
+def _excluded(j, g, lo, ps, w, sgrp, sloop, spos, slen):
+    """Is source j excluded for a point of group g, loop lo, position ps and window w: the same
+    group (its own island), or on the point's own loop within its window of positions (hole
+    splitting, tunnels)? The point's values come as scalars and the test is one expression: the
+    pair loops then compile to straight code (indexing the point's arrays per pair, with early
+    returns, made them ~20x slower)."""
+    dp = abs(spos[j] - ps)
+    return sgrp[j] == g or (w >= 0 and sloop[j] == lo and min(dp, slen[j] - dp) <= w)
 
 
 @numba.njit(cache=True, fastmath=True)
@@ -109,10 +106,11 @@ def _nearest_admissible(i, x, xgrp, xloop, xpos, xwin, o, sgrp, sloop, spos, sle
     """(squared distance, index) of the nearest source point i may use (index -1 if none):
     pass 1 of both kernels, no exp, cheap."""
     x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+    g, lo, ps, xw = xgrp[i], xloop[i], xpos[i], xwin[i]
     best = 1e300
     bj = -1
     for j in range(o.shape[0]):
-        if not plain and _excluded(i, j, xgrp, xloop, xpos, xwin, sgrp, sloop, spos, slen):
+        if not plain and _excluded(j, g, lo, ps, xw, sgrp, sloop, spos, slen):
             continue
         r0 = o[j, 0] - x0
         r1 = o[j, 1] - x1
@@ -134,8 +132,9 @@ def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos,
     plain = xgrp[i] == NO_GROUP and xwin[i] < 0
     best, bj = _nearest_admissible(i, x, xgrp, xloop, xpos, xwin, o, sgrp, sloop, spos, slen, plain)
     lim = best + prune2  # relative pruning: weight below exp(-16) of the nearest source's
+    g, lo, ps, xw = xgrp[i], xloop[i], xpos[i], xwin[i]
     for j in range(m):  # pass 2: the field
-        if not plain and _excluded(i, j, xgrp, xloop, xpos, xwin, sgrp, sloop, spos, slen):
+        if not plain and _excluded(j, g, lo, ps, xw, sgrp, sloop, spos, slen):
             continue
         r0 = o[j, 0] - x0
         r1 = o[j, 1] - x1
@@ -171,10 +170,10 @@ def _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos,
 @numba.njit(cache=True, parallel=True)
 def _field_light(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
                  out_h, out_near, out_dist):
-    """Light mode over all points, parallel (threads over points)."""
+    """Light mode over all points, parallel (threads over points); lc2, prune2: (N,) per point."""
     for i in numba.prange(x.shape[0]):
-        _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
-                     out_h, out_near, out_dist)
+        _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2[i], ki, kernel,
+                     prune2[i], out_h, out_near, out_dist)
 
 
 @numba.njit(cache=True)
@@ -182,8 +181,8 @@ def _field_light_serial(x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, s
                         out_h, out_near, out_dist):
     """Light mode, one thread: for the few points of a tracing step (no thread start-up cost)."""
     for i in range(x.shape[0]):
-        _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2, ki, kernel, prune2,
-                     out_h, out_near, out_dist)
+        _light_point(i, x, xgrp, xloop, xpos, xwin, o, tau, b, h, sgrp, sloop, spos, slen, lc2[i], ki, kernel,
+                     prune2[i], out_h, out_near, out_dist)
 
 
 @numba.njit(cache=True)
@@ -384,8 +383,9 @@ def _full_point(i, x, xv, xgrp, xloop, xpos, xwin, o, ov, tau, b, h, sgrp, sloop
     if row >= 0:
         for j in range(m):
             kv[row, j] = -2  # excluded
+    g, lo, ps, xw = xgrp[i], xloop[i], xpos[i], xwin[i]
     for j in range(m):
-        if not plain and _excluded(i, j, xgrp, xloop, xpos, xwin, sgrp, sloop, spos, slen):
+        if not plain and _excluded(j, g, lo, ps, xw, sgrp, sloop, spos, slen):
             continue
         r0 = o[j, 0] - x0
         r1 = o[j, 1] - x1
@@ -733,14 +733,19 @@ class IndicatorField:
 
     def evaluate(self, x: Arr, *, x_vertex: NDArray[np.int64] | None = None, x_group: NDArray[np.int64] | None = None,
                  x_loop: NDArray[np.int64] | None = None, x_pos: NDArray[np.int64] | None = None,
-                 x_window: NDArray[np.int64] | None = None) -> Evaluation:
+                 x_window: NDArray[np.int64] | None = None, x_lc: Arr | None = None) -> Evaluation:
         """H(X) at points x (N, 3). x_group: sources of that group are excluded for each point;
         x_loop / x_pos / x_window: sources of the same loop within x_window positions of x_pos are
         excluded (-1 = no window); in full mode they also say which points are consecutive along a
         loop (coherence across points, FieldParams.point_stride). x_vertex: the mesh vertex each
-        point is (shielding ignores its triangles; -1 for a free point)."""
+        point is (shielding ignores its triangles; -1 for a free point). x_lc: (N,) L_c per point,
+        light mode only (points of several loops, each with its own L_c, in one call: the same H
+        as one call per L_c); None = the field's L_c."""
         x = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(-1, 3))
         n = len(x)
+        if x_lc is not None and self.full:
+            raise ValueError("x_lc (an L_c per point) is for light mode only: full mode's free points and "
+                             "pruning depend on L_c")
 
         def ints(a, fill):
             return np.full(n, fill, dtype=np.int64) if a is None else np.ascontiguousarray(a, dtype=np.int64)
@@ -755,6 +760,16 @@ class IndicatorField:
         lc2 = self.lc * self.lc
         prune2 = self.prune * self.prune if np.isfinite(self.prune) else np.inf
         prune2 = min(prune2, 1e300)
+        if not self.full:  # the light kernels read L_c^2 and the pruning bound per point
+            if x_lc is None:
+                lc2_pt, prune2_pt = np.full(n, lc2), np.full(n, prune2)
+            else:
+                lc_pt = np.ascontiguousarray(x_lc, dtype=np.float64).reshape(n)
+                if not np.all(lc_pt > 0):
+                    raise ValueError("x_lc: L_c must be positive")
+                lc2_pt = lc_pt * lc_pt
+                prune2_pt = (np.minimum((PRUNE_GAUSS * lc_pt) ** 2, 1e300) if self.kernel == 0
+                             else np.full(n, 1e300))
         p = self.params
         if n == 0 or len(S) == 0:
             return Evaluation(H.reshape(n, 3, 3), near, dist, 0)
@@ -766,7 +781,8 @@ class IndicatorField:
             if not self.full:
                 lk: Any = _field_light if sl.stop - sl.start >= SERIAL_BELOW else _field_light_serial
                 lk(x[sl], xg[sl], xl[sl], xp[sl], xw[sl], S.points, S.tangent, S.outward, S.charge, S.group,
-                   S.loop, S.pos, S.loop_len, lc2, p.ki, self.kernel, prune2, H[sl], near[sl], dist[sl])
+                   S.loop, S.pos, S.loop_len, lc2_pt[sl], p.ki, self.kernel, prune2_pt[sl], H[sl], near[sl],
+                   dist[sl])
                 pairs += (sl.stop - sl.start) * len(S)
             else:
                 args = self._full_args()
