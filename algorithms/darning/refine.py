@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from ..topology import edge_table, halfedges
 from .flips import flip_passes
+from .refine_kernels import smooth_bad, unchangeable
 
 
 @dataclass(frozen=True, eq=False)
@@ -325,7 +326,7 @@ def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
         free = np.concatenate([movable, np.ones(len(P) - nv0, dtype=bool)])  # inserted points move too
         # moves only around faces below the bound itself (the margin is for the insertions)
         below = bad & (corner_angles(P, f).min(axis=1) < strict)
-        moved = _smooth_bad(P, f, free, np.flatnonzero(below)) if below.any() else 0
+        moved = smooth_bad(P, f, free, np.flatnonzero(below)) if below.any() else 0  # _smooth_bad compiled
         if moved:
             f, _ = relax(P, f, fixed, locked=lk)
             _, bad, choice = _bad_triangles(P, f, fixed, lk, target)
@@ -410,7 +411,7 @@ def _bad_triangles(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
     ang = corner_angles(p, f)
     k = np.argmin(ang, axis=1)
     small = ang[np.arange(len(f)), k] < target
-    stuck = _unchangeable(f, len(p), fixed, locked)
+    stuck = unchangeable(f, len(p), fixed, locked)
     r = np.arange(len(f))
     # edges at corner k: edge k (f[k] -> f[k+1]) and edge k-1 (f[k-1] -> f[k])
     corner_fixed = stuck[r, k] & stuck[r, (k + 2) % 3]
@@ -454,7 +455,7 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     # Ruppert's encroachment rule for the edges that cannot split, with Shewchuk's diametral lens: a
     # point that sees a border / locked edge at more than 120 degrees is not inserted (it would make
     # a flat triangle on that edge)
-    stuck = _unchangeable(f, len(p), fixed, locked)
+    stuck = unchangeable(f, len(p), fixed, locked)
     se = np.stack([f[stuck], np.roll(f, -1, axis=1)[stuck]], axis=1)
 
     def encroaches(x: NDArray[np.float64]) -> NDArray[np.bool_]:
@@ -614,7 +615,7 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
     their edge), folds no face and never touches a vertex on a border, locked or single edge.
     Returns (faces,
     collapses); the removed vertex stays in ``p``, unreferenced."""
-    stuck = _unchangeable(f, len(p), fixed, locked)
+    stuck = unchangeable(f, len(p), fixed, locked)
     nv = len(p)
     a, b = f[stuck], np.roll(f, -1, axis=1)[stuck]
     on_stuck = np.zeros(nv, dtype=bool)
