@@ -271,8 +271,10 @@ def normalize(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
     #    island only at vertices are set aside
     f_split, vertex_origin = _split_fans(f, alive, links, nv)
     ids = np.flatnonzero(alive)
+    split_islands = None  # (faces, count, labels) of the islands of f_split[ids], reused in step 5
     if len(ids):
         n_isl, lab = islands(f_split[ids])
+        split_islands = (ids, n_isl, lab)
         size = np.bincount(lab, minlength=n_isl)
         # (original vertex, island) pairs; only vertices shared by two or more islands matter
         code = np.unique(vertex_origin[f_split[ids]].ravel().astype(np.int64) * n_isl + np.repeat(lab, 3))
@@ -289,6 +291,7 @@ def normalize(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
         if int(alive.sum()) != n_alive:  # fragments went: the sheets and fans change
             links = _sheet_links(v, f, alive)
             f_split, vertex_origin = _split_fans(f, alive, links, nv)
+            split_islands = None
 
     # 5. orientation per island: flip the minority so neighbours agree; set aside what cannot be
     #    oriented (non-orientable strips)
@@ -302,7 +305,10 @@ def normalize(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
         drop(conflicts, "cannot be oriented consistently with its neighbours (non-orientable)")
     ids = np.flatnonzero(alive)
     if len(ids):
-        n_isl, lab = islands(f[ids])
+        if split_islands is not None and np.array_equal(split_islands[0], ids):
+            _, n_isl, lab = split_islands  # the same faces as step 4 (nothing set aside since): same islands
+        else:
+            n_isl, lab = islands(f[ids])
         par = parity[ids]
         flip_count = np.bincount(lab, weights=par.astype(float), minlength=n_isl)
         size = np.bincount(lab, minlength=n_isl)

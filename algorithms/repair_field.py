@@ -81,6 +81,11 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     # call per loop, without a parallel kernel launch per loop); full mode per loop (its free
     # points and pruning depend on L_c)
     batched = _loop_fields(src, frames, loop_ids, params, lcs, wins) if params.mode != "full" else None
+    if batched is not None:  # (16a) at every loop point in one batched call
+        nrm_all, ten_all = top_normal(np.concatenate(batched), np.concatenate([frames[k].tangent for k in loop_ids]),
+                                      np.concatenate([frames[k].normal for k in loop_ids]))
+        cuts = np.cumsum([len(frames[k].vertices) for k in loop_ids])[:-1]
+        normals, tensions = np.split(nrm_all, cuts), np.split(ten_all, cuts)
     for idx, k in enumerate(loop_ids):
         fr = frames[k]
         n = len(fr.vertices)
@@ -91,12 +96,12 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
         win = wins[idx]
         mine = src.loop == k
         if batched is not None:
-            Hk = batched[idx]
+            Hk, nrm, ten = batched[idx], normals[idx], tensions[idx]
         else:
             Hk = IndicatorField(src, p, lc, bvh=bvh, free=fp).evaluate(
                 fr.points, x_vertex=fr.vertices, x_loop=np.full(n, k), x_pos=np.arange(n),
                 x_window=np.full(n, win)).H
-        nrm, ten = top_normal(Hk, fr.tangent, fr.normal)  # (16a)
+            nrm, ten = top_normal(Hk, fr.tangent, fr.normal)  # (16a)
         f = np.einsum("nij,nj->ni", Hk, nrm)
         omega = np.where((f * fr.outward).sum(axis=1) > 0, ten, 0.0)  # attraction index
         mx = local_maxima(omega)
