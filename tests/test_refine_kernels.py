@@ -8,8 +8,8 @@ import pytest
 
 from algorithms.cases import cap, cut, icosphere
 from algorithms.darning import refine, triangulate
-from algorithms.darning.refine import _smooth_bad, _unchangeable, corner_angles
-from algorithms.darning.refine_kernels import smooth_bad, unchangeable
+from algorithms.darning.refine import _smooth_bad, _unchangeable
+from algorithms.darning.refine_kernels import corner_angles, smooth_bad, unchangeable
 from algorithms.topology import boundary_loops
 
 
@@ -62,3 +62,20 @@ def test_unchangeable_matches_the_numpy_test(seed):
         assert ref.any() and not ref.all()
     # the locked edges count: more edges are unchangeable with them
     assert unchangeable(sub, len(p), fixed, locked).sum() > unchangeable(sub, len(p), fixed, None).sum()
+
+
+def test_corner_angles_match_the_numpy_expression():
+    from algorithms.darning.refine import _angle_at
+
+    rng = np.random.default_rng(4)
+    p = rng.normal(size=(500, 3))
+    f = rng.integers(0, 500, size=(2000, 3))
+    f[:5, 1] = f[:5, 0]  # degenerate corners: a zero edge
+    ref = np.stack([_angle_at(p, f[:, k], f[:, (k + 1) % 3], f[:, (k + 2) % 3]) for k in range(3)], axis=1)
+    got = corner_angles(p, f)
+    np.testing.assert_allclose(got, ref, rtol=1e-14, atol=1e-15)
+    # a triangle's angles sum to pi, a right triangle has its right angle where expected
+    ok = np.all(f[:, [0, 1, 2]] != f[:, [1, 2, 0]], axis=1)
+    np.testing.assert_allclose(got[ok].sum(axis=1), np.pi, rtol=1e-12)
+    right = corner_angles(np.array([[0.0, 0, 0], [2.0, 0, 0], [0, 1.0, 0]]), np.array([[0, 1, 2]]))
+    np.testing.assert_allclose(right[0], [np.pi / 2, np.arctan2(1, 2), np.arctan2(2, 1)], rtol=1e-14)

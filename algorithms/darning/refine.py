@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from ..topology import edge_table, halfedges
 from .flips import flip_passes
+from .refine_kernels import corner_angles as _corner_angles
 from .refine_kernels import smooth_bad, unchangeable
 
 
@@ -223,8 +224,10 @@ class AngleRefined:
 
 
 def corner_angles(p: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
-    """(M, 3) angle at each corner of each face, radians (column k: at f[:, k])."""
-    return np.stack([_angle_at(p, f[:, k], f[:, (k + 1) % 3], f[:, (k + 2) % 3]) for k in range(3)], axis=1)
+    """(M, 3) angle at each corner of each face, radians (column k: at f[:, k]): _angle_at per
+    corner, compiled (refine_kernels.corner_angles; tests/test_refine_kernels.py checks it against
+    _angle_at)."""
+    return _corner_angles(p, f)
 
 
 def _fixed_edge_mask(f: NDArray[np.int64], nv: int, keys: NDArray[np.int64]) -> NDArray[np.bool_]:
