@@ -144,3 +144,19 @@ def test_flip_passes_reach_delaunay_on_a_plane():
     assert n > 0
     assert worst <= 1e-9
     assert len(f) == len(bad)  # flips keep the face count
+
+
+def test_edge_keys_among_keeps_exactly_the_edges_between_patch_vertices():
+    from algorithms.darning.flips import edge_keys_among
+
+    rng = np.random.default_rng(2)
+    nv = 40
+    patch = rng.integers(0, 20, size=(15, 3))
+    fixed = rng.integers(0, nv, size=(30, 3))
+    pairs = rng.integers(0, nv, size=(12, 2))
+    mine = set(np.unique(patch).tolist())
+    for edges, faces in ((fixed, True), (pairs, False)):
+        e = halfedges(edges) if faces else edges
+        ref = sorted({min(a, b) * nv + max(a, b) for a, b in e.tolist() if a in mine and b in mine})
+        got = edge_keys_among(patch, edges, nv, faces)
+        assert got.tolist() == ref and 0 < len(ref) < len(e)

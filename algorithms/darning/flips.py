@@ -148,3 +148,25 @@ def flip_passes(p: np.ndarray, f: np.ndarray, fixed_keys: np.ndarray, locked_key
             active[f2] = True
             total += 1
     return total
+
+
+@numba.njit(cache=True)
+def edge_keys_among(f: np.ndarray, edges: np.ndarray, nv: int, faces: bool) -> np.ndarray:
+    """Sorted unique keys min * nv + max of ``edges`` whose two ends are both vertices of ``f``
+    (M, 3): the only ones flip_passes can ever look up (its candidate edges join patch vertices).
+    ``edges``: (K, 3) faces (their three edges) if ``faces``, else (K, 2) vertex pairs."""
+    mine = np.zeros(nv, dtype=np.bool_)
+    for i in range(f.shape[0]):
+        for k in range(3):
+            mine[f[i, k]] = True
+    per = 3 if faces else 1
+    keys = np.empty(per * edges.shape[0], dtype=np.int64)
+    n = 0
+    for i in range(edges.shape[0]):
+        for k in range(per):
+            a = edges[i, k]
+            b = edges[i, (k + 1) % 3] if faces else edges[i, 1]
+            if mine[a] and mine[b]:
+                keys[n] = min(a, b) * nv + max(a, b)
+                n += 1
+    return np.unique(keys[:n])

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..topology import edge_table, halfedges
-from .flips import flip_passes
+from .flips import edge_keys_among, flip_passes
 from .refine_kernels import corner_angles as _corner_angles
 from .refine_kernels import smooth_bad, unchangeable
 
@@ -77,9 +77,9 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
     f = np.array(patch, dtype=np.int64, copy=True).reshape(-1, 3)
     fixed = np.asarray(fixed_faces, dtype=np.int64).reshape(-1, 3)
     nv = len(p)
-    fixed_keys = (np.unique(np.sort(halfedges(fixed), axis=1) @ np.array([nv, 1])) if len(fixed)
-                  else np.zeros(0, np.int64))
-    locked_keys = (np.unique(np.sort(np.asarray(locked, dtype=np.int64), axis=1) @ np.array([nv, 1]))
+    # the border / locked edge keys between patch vertices (the only ones a flip can meet), compiled
+    fixed_keys = edge_keys_among(f, fixed, nv, True) if len(fixed) else np.zeros(0, np.int64)
+    locked_keys = (edge_keys_among(f, np.asarray(locked, dtype=np.int64).reshape(-1, 2), nv, False)
                    if locked is not None and len(locked) else np.zeros(0, np.int64))
     # the passes (the independent sets, the refusals) run compiled: flips.flip_passes
     total = int(flip_passes(p, f, fixed_keys, locked_keys, int(max_passes)))
