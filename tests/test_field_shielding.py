@@ -211,3 +211,14 @@ def test_coherence_across_points_skips_a_point_off_its_key_points_chord():
         H[key] = f.evaluate(x, x_loop=loop, x_pos=pos).H
     assert np.abs(H["exact"][0]).max() > 0.1 and np.abs(H["exact"][1]).max() == 0.0
     np.testing.assert_allclose(H["coherent"], H["exact"], rtol=1e-9, atol=1e-12)
+
+
+def test_mesh_bvh_is_built_once_per_mesh():
+    from algorithms.cases import icosphere
+
+    m = icosphere(2)
+    b = mesh_bvh(m)
+    assert mesh_bvh(m) is b  # the same (immutable) mesh: the same BVH
+    m2 = icosphere(2)
+    b2 = mesh_bvh(m2)
+    assert b2 is not b and b2.n_triangles == b.n_triangles == len(m.faces)

@@ -13,6 +13,7 @@ window (EPS_T, 1 - EPS_T) keeps the open segment open: touching at X or O does n
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field
 
 import numba
@@ -155,8 +156,17 @@ def build_bvh(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Bvh:
                np.ascontiguousarray(tri), np.ascontiguousarray(f), np.ascontiguousarray(nrm), max(scale, 1e-300))
 
 
+_BVH_OF: weakref.WeakKeyDictionary[Mesh, Bvh] = weakref.WeakKeyDictionary()
+
+
 def mesh_bvh(mesh: Mesh) -> Bvh:
-    return build_bvh(mesh.vertices, mesh.faces)
+    """The BVH of a mesh's faces, built once per Mesh (a Mesh and its arrays are immutable, so the
+    island lines, the tunnel lines and every hole split of one repair share one build)."""
+    got = _BVH_OF.get(mesh)
+    if got is None:
+        got = build_bvh(mesh.vertices, mesh.faces)
+        _BVH_OF[mesh] = got
+    return got
 
 
 @numba.njit(cache=True, inline="always")
