@@ -539,18 +539,31 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
 
         keep_still = np.concatenate(pinned) if pinned else np.zeros(0, dtype=np.int64)
         V, fairing_used = _fair_new(V, F, n_input, params.fairing, keep_still)
+        if params.field.use_free_points and len(model.free_points):
+            # full mode: the free points sample the missing surface: the fill passes through them
+            # (darning/samples.py), faired again around them
+            from .darning.samples import snap_to_samples
+
+            V, held = snap_to_samples(V, np.setdiff1d(np.arange(n_input, len(V)), keep_still), model.free_points,
+                                      spacing=spacing, n_fixed=n_input)
+            if len(held):
+                V, fairing_used = _fair_new(V, F, n_input, params.fairing, np.concatenate([keep_still, held]))
+                fairing_used += f" through {len(held)} free points"
         timings_note["fairing"] = fairing_used
         # the patches were darned one by one and the bridge chains moved in the fairing: Delaunay
         # edge flips over all new faces together (input faces fixed) let edges cross the chains
         # (not the crease chains)
         from .darning.fair import tangential_relax
         from .darning.refine import refine_angles
+        from .darning.samples import free_samples
 
         # the fairing placed the vertices on a smooth surface but unevenly: even them out along it
         movable = np.setdiff1d(np.arange(n_input, len(V)), keep_still)
         fit = None
         if params.fit == "apss" and len(movable):  # thin parts: the fairing spans them flat; the APSS follows them
             fit = _Surroundings(V, F, n_input, work.normals[0], spacing)
+            if params.field.use_free_points and len(model.free_points):  # full mode: samples of the missing surface
+                fit.add(*free_samples(model.free_points, V, F, fit.points, movable, spacing=spacing))
             V, moved = fit.project(V, movable)
             timings_note["fairing"] += " + APSS"
         V = tangential_relax(V, F[n_before:], movable, iterations=params.smooth)
@@ -775,6 +788,15 @@ class _Surroundings:
         self.normals = normals[:n_input][used]
         self.tree = cKDTree(self.points)
         self.spacing = spacing
+
+    def add(self, points: NDArray[np.float64], normals: NDArray[np.float64]) -> None:
+        """More data (e.g. free points with normals, darning/samples.py)."""
+        from scipy.spatial import cKDTree
+
+        if len(points):
+            self.points = np.vstack([self.points, points])
+            self.normals = np.vstack([self.normals, normals])
+            self.tree = cKDTree(self.points)
 
     def project(self, V: NDArray[np.float64],
                 which: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:

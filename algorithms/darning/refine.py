@@ -622,8 +622,8 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
     on_stuck[b] = True
     cand = np.unique(f[bad])
     cand = cand[free[cand] & ~on_stuck[cand]]
-    if len(cand):  # only vertices in the diametral lens of a border / locked edge
-        cand = cand[_encroached(p, np.stack([a, b], axis=1), p[cand])]
+    if len(cand):  # the vertices in the diametral lens of a border / locked edge first
+        cand = cand[np.argsort(~_encroached(p, np.stack([a, b], axis=1), p[cand]), kind="stable")]
     done = 0
     for c in cand:  # sequential: each collapse changes the stars of the next candidates
         rows = np.flatnonzero((f == c).any(axis=1))
