@@ -796,7 +796,7 @@ def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operat
 
 def _thin_tips(V: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int, N: NDArray[np.float64],
                holes: list, patch_ids: list[NDArray[np.int64]], keep_still: NDArray[np.int64], spacing: float, *,
-               rings: int = 3, max_points: int = 250, surrounded: float = 0.85) -> list:
+               rings: int = 2, max_points: int = 150, surrounded: float = 0.85) -> list:
     """(RBF implicit, fill vertices, reach) for each darned hole across a thin part (darning/implicit.py):
     the input normals around its loop face opposite ways. The implicit interpolates the input
     vertices within ``rings`` rings of the loop (at most ``max_points``, evenly thinned); the fill
@@ -820,7 +820,7 @@ def _thin_tips(V: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int, N:
         if not len(which):
             continue
         try:
-            rbf = fit_rbf(V[pts], N[pts], spacing=spacing)
+            rbf = fit_rbf(V[pts], N[pts], spacing=spacing, stride=2)
         except (ValueError, np.linalg.LinAlgError):
             continue
         c = V[lp].mean(axis=0)

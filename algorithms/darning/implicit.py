@@ -77,7 +77,7 @@ class RBFImplicit:
 
 
 def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacing: float,
-            offset: float = 1.0) -> RBFImplicit:
+            offset: float = 1.0, stride: int = 1) -> RBFImplicit:
     """The r^3 RBF implicit through ``points`` (N, 3) with unit ``normals`` (N, 3) pointing out
     (module docstring). ``spacing``: the data's edge length; ``offset``: eps in units of it."""
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
@@ -92,11 +92,12 @@ def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacin
     centres, values = [p], [np.zeros(len(p))]
     for sign in (1.0, -1.0):
         eps = np.full(len(p), offset * spacing)
+        eps[np.arange(len(p)) % stride != (0 if sign > 0 else stride // 2)] = 0.0  # every stride-th point
         ok = np.zeros(len(p), dtype=bool)
         for _ in range(4):  # sequential: halve eps where the off-surface point crosses a wall (Carr)
             _, j = tree.query(p + sign * eps[:, None] * n, k=1)
-            ok = j == own
-            if ok.all():
+            ok = (j == own) & (eps > 0)
+            if ok.sum() == (eps > 0).sum():
                 break
             eps = np.where(ok, eps, eps / 2)
         centres.append(p[ok] + sign * eps[ok, None] * n[ok])
