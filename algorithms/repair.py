@@ -546,7 +546,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             # (darning/samples.py), faired again around them
             from .darning.samples import snap_to_samples
 
-            V, held = snap_to_samples(V, np.setdiff1d(np.arange(n_input, len(V)), keep_still), model.free_points,
+            V, held = snap_to_samples(V, F, np.setdiff1d(np.arange(n_input, len(V)), keep_still), model.free_points,
                                       spacing=spacing, n_fixed=n_input)
             if len(held):
                 V, fairing_used = _fair_new(V, F, n_input, params.fairing, np.concatenate([keep_still, held]))

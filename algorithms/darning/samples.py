@@ -75,8 +75,8 @@ def free_samples(free: NDArray[np.float64], V: NDArray[np.float64], F: NDArray[n
     return P[ok], n[ok]
 
 
-def snap_to_samples(V: NDArray[np.float64], movable: NDArray[np.int64], free: NDArray[np.float64], *,
-                    spacing: float, reach: float = 4.0,
+def snap_to_samples(V: NDArray[np.float64], F: NDArray[np.int64], movable: NDArray[np.int64],
+                    free: NDArray[np.float64], *, spacing: float, reach: float = 4.0, agree: float = 0.5,
                     n_fixed: int = 0) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Interpolation of the free points by the fill: each free point within ``reach`` * ``spacing``
     of the fill pulls the nearest vertex of the surface onto itself when that vertex is a ``movable``
@@ -101,6 +101,20 @@ def snap_to_samples(V: NDArray[np.float64], movable: NDArray[np.int64], free: ND
     cand = np.flatnonzero(can)
     d, j = cKDTree(V[cand]).query(P, k=1)
     use = (d <= reach * spacing) & (d <= d_all + 1e-12)
+    # a free point within ``agree`` * spacing of the fill along the vertex normal agrees with it
+    # (within the sampling noise: interpolating noisy samples would only make the fill rough)
+    v = cand[j]
+    near = np.zeros(len(V), dtype=bool)
+    near[v[use]] = True
+    fs = F[near[F].any(axis=1)]
+    t = V[fs]
+    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    vn = np.zeros((len(V), 3))
+    for k in range(3):
+        np.add.at(vn, fs[:, k], fn)
+    vn /= np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
+    off = np.abs(np.einsum("ij,ij->i", P - V[v], vn[v]))
+    use &= off > agree * spacing
     if not use.any():
         return out, np.zeros(0, dtype=np.int64)
     tgt = cand[j[use]]
