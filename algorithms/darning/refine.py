@@ -608,8 +608,10 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
                   ) -> tuple[NDArray[np.int64], int]:
     """Remove free vertices of the bad faces by collapsing each onto the neighbour that leaves the
     best smallest angle, when that raises the smallest angle of its faces: the vertex a Delaunay
-    refinement could not fix: only a vertex inside the diametral lens of a border edge, which may
-    not split, so no point can be inserted near it (and moving it did not help). A collapse keeps
+    refinement could not fix (no point was inserted this round, and moving it did not help): first
+    the vertices inside the diametral lens of a border edge, which may not split, so no point can be
+    inserted near them, then the others (e.g. a new vertex a fraction of an edge from a border
+    vertex, whose off-centres all encroach the border). A collapse keeps
     the surface a manifold (the link condition: the two ends share only the two vertices opposite
     their edge), folds no face and never touches a vertex on a border, locked or single edge.
     Returns (faces,
