@@ -798,9 +798,12 @@ def _thin_tips(V: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int, N:
                holes: list, patch_ids: list[NDArray[np.int64]], keep_still: NDArray[np.int64], spacing: float, *,
                rings: int = 2, max_points: int = 150, surrounded: float = 0.85) -> list:
     """(RBF implicit, fill vertices, reach) for each darned hole across a thin part (darning/implicit.py):
-    the input normals around its loop face opposite ways. The implicit interpolates the input
-    vertices within ``rings`` rings of the loop (at most ``max_points``, evenly thinned); the fill
-    vertices are the hole's patch and the bridge-chain vertices on its loop; reach: the loop's radius."""
+    the input normals around its loop face opposite ways, and at least ``surrounded`` of its loop is
+    input border (where bridge chains bound much of it, the surface beyond them is missing and the
+    implicit would extrapolate there: measured worse on the bunny cut into islands, 1.3 -> 1.6 %).
+    The implicit interpolates the input vertices within ``rings`` rings of the loop (at most
+    ``max_points``, evenly thinned); the fill vertices are the hole's patch (not the chains, shared
+    with the next hole); reach: the loop's radius."""
     from .darning.implicit import fit_rbf, opposite_normals
 
     out = []
