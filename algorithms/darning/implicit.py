@@ -66,11 +66,18 @@ class RBFImplicit:
         ``reach`` or whose gradient vanishes stay where they were."""
         x0 = np.array(x, dtype=np.float64, copy=True).reshape(-1, 3)
         q = x0.copy()
+        tol = 1e-5 * float(np.linalg.norm(np.ptp(self.centres, axis=0)))
+        act = np.arange(len(q))
         for _ in range(iterations):  # sequential: each step starts from the last
-            f, g = self.value_gradient(q)
+            f, g = self.value_gradient(q[act])
             gg = np.einsum("ij,ij->i", g, g)
             ok = gg > 0
-            q[ok] -= (f[ok] / gg[ok])[:, None] * g[ok]
+            step = np.zeros((len(act), 3))
+            step[ok] = (f[ok] / gg[ok])[:, None] * g[ok]
+            q[act] -= step
+            act = act[np.linalg.norm(step, axis=1) > tol]  # converged points stop
+            if not len(act):
+                break
         bad = ~np.isfinite(q).all(axis=1) | (np.linalg.norm(q - x0, axis=1) > reach)
         q[bad] = x0[bad]
         return q
