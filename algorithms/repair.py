@@ -59,7 +59,7 @@ class RepairParams:
     neighbourhood_factor: float = 1.0  # same-neighbourhood radius = factor x L_c
     crease_angle: float = 40.0  # sharp input edges (dihedral above, degrees) are continued across holes; 180: off
     smooth: int = 3  # tangential relaxation steps of all new vertices after the final fairing (liepa-fair)
-    fit: str = "apss"  # after the fairing, new vertices move onto the APSS of the input (darning/apss.py); "none"
+    fit: str = "apss"  # after the fairing: APSS of the input (darning/apss.py) + RBF on thin tips (implicit.py); "none"
 
     def __post_init__(self) -> None:
         if self.tunnels not in TUNNELS:
@@ -569,7 +569,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             V, moved = fit.project(V, movable)
             timings_note["fairing"] += " + APSS"
         # holes across thin parts (opposite normals around them): onto the RBF implicit of their rings
-        tips = _thin_tips(V, F[:n_before], n_input, work.normals[0], final, patch_ids, keep_still, spacing)
+        tips = _thin_tips(V, F[:n_before], n_input, work.normals[0], final, patch_ids, keep_still,
+                          spacing) if params.fit != "none" else []
         if tips:
             from .darning.implicit import refine_onto
 
