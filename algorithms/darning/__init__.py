@@ -18,6 +18,12 @@ Methods (the names the command line uses, ``--darning``):
   by a tangential relaxation and edge flips (measured best, see :func:`darn`). ``fairing="U1"``
   is the umbrella (membrane) variant.
 
+Beyond the fairing (used by the repair pipeline after its global fairing): ``apss.py`` (the
+algebraic point set surface of the input, where the fairing spans a thin part flat),
+``implicit.py`` (the r^3 RBF implicit of a hole's rings, for a hole across a thin part: a cut tip
+rises onto it in refine -> project rounds) and ``samples.py`` (free points as samples of the
+missing surface: PRAF normals for the APSS, and the fill faired through the samples it missed).
+
 Orientation: a loop is given in its positive direction (the surrounding surface has a face with
 half-edge a -> b for every loop edge a -> b, as :func:`algorithms.topology.boundary_loops`
 returns it); every patch face holds b -> a, so the filled mesh is consistently oriented.

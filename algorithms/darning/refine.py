@@ -612,8 +612,10 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
                   ) -> tuple[NDArray[np.int64], int]:
     """Remove free vertices of the bad faces by collapsing each onto the neighbour that leaves the
     best smallest angle, when that raises the smallest angle of its faces: the vertex a Delaunay
-    refinement could not fix: only a vertex inside the diametral lens of a border edge, which may
-    not split, so no point can be inserted near it (and moving it did not help). A collapse keeps
+    refinement could not fix (no point was inserted this round, and moving it did not help): first
+    the vertices inside the diametral lens of a border edge, which may not split, so no point can be
+    inserted near them, then the others (e.g. a new vertex a fraction of an edge from a border
+    vertex, whose off-centres all encroach the border). A collapse keeps
     the surface a manifold (the link condition: the two ends share only the two vertices opposite
     their edge), folds no face and never touches a vertex on a border, locked or single edge.
     Returns (faces,
@@ -626,8 +628,8 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
     on_stuck[b] = True
     cand = np.unique(f[bad])
     cand = cand[free[cand] & ~on_stuck[cand]]
-    if len(cand):  # only vertices in the diametral lens of a border / locked edge
-        cand = cand[_encroached(p, np.stack([a, b], axis=1), p[cand])]
+    if len(cand):  # the vertices in the diametral lens of a border / locked edge first
+        cand = cand[np.argsort(~_encroached(p, np.stack([a, b], axis=1), p[cand]), kind="stable")]
     done = 0
     for c in cand:  # sequential: each collapse changes the stars of the next candidates
         rows = np.flatnonzero((f == c).any(axis=1))

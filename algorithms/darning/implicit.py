@@ -1,0 +1,205 @@
+"""A hole's surroundings as an implicit surface: the RBF interpolant of Carr et al. 2001
+("Reconstruction and representation of 3D objects with radial basis functions"), for holes across
+thin parts.
+
+Fairing (fair.py) spans a hole across a thin part (an ear cut off by a ball, a band across a thin
+rim) nearly flat: the tangents the fixed rings impose reach only an edge or two into the patch, so
+a cut tip comes back blunt (the bunny's ear tip: the cap rises 0.014 over the loop centre, the
+truth 0.031). The APSS (apss.py) fits one sphere per point, too coarse for a tip whose two sides
+face opposite ways. The RBF implicit of the rings around the hole extrapolates the whole end:
+
+    f(x) = sum_i lambda_i phi(|x - c_i|) + a0 + a . x,      phi(r) = r^3 (triharmonic in 3-D)
+
+interpolating f = 0 at the surface points p_i, f = +eps_i at p_i + eps_i n_i and f = -eps_i at
+p_i - eps_i n_i (Carr's off-surface points along the normals), with the side conditions
+sum lambda_i = 0, sum lambda_i c_i = 0 (one dense symmetric solve of 3N + 4 unknowns). r^3 is the
+smoothest interpolant (it minimises the thin-plate energy of the third order in 3-D), so the zero
+set continues a tube or a sheet and closes it with a rounded end. **(choice)** eps_i = ``offset``
+times the data spacing, halved (up to 3 times) while p_i +- eps_i n_i is nearer to another data
+point than to p_i (Carr's rule: an off-surface point must not cross a thin wall); a point still
+crossing is left out.
+
+A fill vertex x moves onto the zero set by Newton steps along the gradient,
+x <- x - f(x) grad f / |grad f|^2 (``iterations`` of them); a step that would move a vertex farther
+than ``reach`` (the caller's bound, e.g. the hole's radius) is not taken.
+
+Measured on the bunny cut into 60 holes, the hole at the ear tip (47 loop vertices, the 4 rings
+around it, 229 points): the truth's missing points lie within 0.50 % of the diagonal of the zero
+set (mean 0.17 %), the faired fill's vertices were up to 1.08 % off, projected 0.45 %.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+
+@dataclass(frozen=True, eq=False)
+class RBFImplicit:
+    """f(x) = sum_i w_i |x - c_i|^3 + a[0] + a[1:] . x (module docstring)."""
+
+    centres: NDArray[np.float64]
+    weights: NDArray[np.float64]
+    affine: NDArray[np.float64]
+
+    def value(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self.value_gradient(x)[0]
+
+    def gradient(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self.value_gradient(x)[1]
+
+    def value_gradient(self, x: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(f(x) (K,), grad f(x) (K, 3)) in one pass over the centres."""
+        q = np.asarray(x, dtype=np.float64).reshape(-1, 3)
+        diff = q[:, None, :] - self.centres[None]
+        d = np.sqrt(np.einsum("qmd,qmd->qm", diff, diff))
+        wd = d * self.weights[None]  # w_i |x - c_i|
+        val = np.einsum("qm,qm->q", wd, d * d) + self.affine[0] + q @ self.affine[1:]
+        return val, 3.0 * np.einsum("qm,qmd->qd", wd, diff) + self.affine[1:]
+
+    def project(self, x: NDArray[np.float64], *, iterations: int = 4,
+                reach: float = np.inf) -> NDArray[np.float64]:
+        """Newton steps onto f = 0 (module docstring); points whose total move would exceed
+        ``reach`` or whose gradient vanishes stay where they were."""
+        x0 = np.array(x, dtype=np.float64, copy=True).reshape(-1, 3)
+        q = x0.copy()
+        tol = 1e-5 * float(np.linalg.norm(np.ptp(self.centres, axis=0)))
+        act = np.arange(len(q))
+        for _ in range(iterations):  # sequential: each step starts from the last
+            f, g = self.value_gradient(q[act])
+            gg = np.einsum("ij,ij->i", g, g)
+            ok = gg > 0
+            step = np.zeros((len(act), 3))
+            step[ok] = (f[ok] / gg[ok])[:, None] * g[ok]
+            q[act] -= step
+            act = act[np.linalg.norm(step, axis=1) > tol]  # converged points stop
+            if not len(act):
+                break
+        bad = ~np.isfinite(q).all(axis=1) | (np.linalg.norm(q - x0, axis=1) > reach)
+        q[bad] = x0[bad]
+        return q
+
+
+def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacing: float,
+            offset: float = 1.0, stride: int = 1) -> RBFImplicit:
+    """The r^3 RBF implicit through ``points`` (N, 3) with unit ``normals`` (N, 3) pointing out
+    (module docstring). ``spacing``: the data's edge length; ``offset``: eps in units of it."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+    nn = np.linalg.norm(n, axis=1)
+    good = nn > 0
+    p, n = p[good], n[good] / nn[good, None]
+    if len(p) < 4:
+        raise ValueError(f"an RBF implicit needs at least 4 points with normals, got {len(p)}")
+    tree = cKDTree(p)
+    own = np.arange(len(p))
+    centres, values = [p], [np.zeros(len(p))]
+    for sign in (1.0, -1.0):
+        eps = np.full(len(p), offset * spacing)
+        eps[np.arange(len(p)) % stride != (0 if sign > 0 else stride // 2)] = 0.0  # every stride-th point
+        ok = np.zeros(len(p), dtype=bool)
+        for _ in range(4):  # sequential: halve eps where the off-surface point crosses a wall (Carr)
+            _, j = tree.query(p + sign * eps[:, None] * n, k=1)
+            ok = (j == own) & (eps > 0)
+            if ok.sum() == (eps > 0).sum():
+                break
+            eps = np.where(ok, eps, eps / 2)
+        centres.append(p[ok] + sign * eps[ok, None] * n[ok])
+        values.append(sign * eps[ok])
+    c = np.vstack(centres)
+    y = np.concatenate(values)
+    m = len(c)
+    A = np.linalg.norm(c[:, None, :] - c[None], axis=2) ** 3
+    P = np.c_[np.ones(m), c]
+    K = np.zeros((m + 4, m + 4))
+    K[:m, :m] = A
+    K[:m, m:] = P
+    K[m:, :m] = P.T
+    sol = _lu_solve(K, np.r_[y, np.zeros(4)])
+    if not np.all(np.isfinite(sol)):
+        raise np.linalg.LinAlgError("singular RBF system")
+    return RBFImplicit(c, sol[:m], sol[m:])
+
+
+@numba.njit(cache=True)
+def _lu_solve(A: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:  # pragma: no cover - compiled
+    """A x = b by Gaussian elimination with partial pivoting, compiled and single-threaded: the
+    systems here are a few hundred unknowns, where a threaded LAPACK solve spends its time waiting
+    for threads on a busy machine (measured 90 ms per fit against 4 ms). NaN if A is singular."""
+    a = A.copy()
+    x = b.copy()
+    n = a.shape[0]
+    for k in range(n):
+        p = k
+        big = abs(a[k, k])
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > big:
+                big = abs(a[i, k])
+                p = i
+        if big == 0.0:
+            x[:] = np.nan
+            return x
+        if p != k:
+            for j in range(n):
+                t = a[k, j]
+                a[k, j] = a[p, j]
+                a[p, j] = t
+            t = x[k]
+            x[k] = x[p]
+            x[p] = t
+        for i in range(k + 1, n):
+            m = a[i, k] / a[k, k]
+            if m != 0.0:
+                for j in range(k + 1, n):
+                    a[i, j] -= m * a[k, j]
+                x[i] -= m * x[k]
+    for k in range(n - 1, -1, -1):
+        s = x[k]
+        for j in range(k + 1, n):
+            s -= a[k, j] * x[j]
+        x[k] = s / a[k, k]
+    return x
+
+
+def opposite_normals(normals: NDArray[np.float64], *, cos_bound: float = -0.95) -> bool:
+    """Whether a hole crosses a thin part: two of the unit ``normals`` around it face (nearly)
+    opposite ways (cosine below ``cos_bound``; the ear tip of the bunny: -0.99)."""
+    n = np.asarray(normals, dtype=np.float64).reshape(-1, 3)
+    ln = np.linalg.norm(n, axis=1)
+    n = n[ln > 0] / ln[ln > 0, None]
+    if len(n) < 2:
+        return False
+    return bool((n @ n.T).min() < cos_bound)
+
+
+def refine_onto(rbf: RBFImplicit, V: NDArray[np.float64], patch: NDArray[np.int64], fixed: NDArray[np.int64],
+                which: NDArray[np.int64], *, spacing: float, reach: float = np.inf, rounds: int = 2,
+                smooth: int = 3) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+    """Bring a fill onto the implicit in rounds: project the fill vertices ``which``, then (each
+    round) refine the ``patch`` faces at the edge length ``spacing`` (refine.py: a cap that rose
+    over a hole is larger than the flat fill it came from, its faces split), project again and
+    relax tangentially (fair.tangential_relax), projecting once more after it. ``fixed``: the faces
+    around the patch (never changed). Returns (vertices, patch faces, the fill vertices: ``which``
+    and the ones added)."""
+    from .fair import tangential_relax
+    from .refine import refine
+
+    v = np.array(V, dtype=np.float64, copy=True)
+    f = np.asarray(patch, dtype=np.int64).reshape(-1, 3)
+    w = np.asarray(which, dtype=np.int64)
+    v[w] = rbf.project(v[w], reach=reach)
+    for _ in range(rounds):  # sequential: each round refines the surface the last one projected
+        r = refine(v, fixed, f, scale=np.full(len(v), spacing))
+        if not r.splits:
+            break
+        w = np.concatenate([w, np.arange(len(v), len(r.vertices))])
+        v, f = np.array(r.vertices, copy=True), r.faces
+        v[w] = rbf.project(v[w], reach=reach)
+        if smooth:
+            v = tangential_relax(v, np.vstack([fixed, f]), w, iterations=smooth)
+            v[w] = rbf.project(v[w], reach=reach)
+    return v, f, w
