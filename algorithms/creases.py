@@ -199,7 +199,13 @@ def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: 
             return None
         return c
 
-    for v in {int(x) for x in edges.ravel()}:
+    # only vertices on the surface's border can be crease ends (a hole interrupts the crease there)
+    f = np.asarray(faces, dtype=np.int64)
+    e_all = np.sort(np.vstack([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    ue, cnt = np.unique(e_all, axis=0, return_counts=True)
+    border = np.zeros(len(vertices) + 1, dtype=bool)
+    border[ue[cnt == 1].ravel()] = True
+    for v in {int(x) for x in edges.ravel() if border[x]}:
         fvn_v = fvn[start[v]:start[v + 1]]
         keep: list[NDArray[np.float64]] = []
         for n in fvn_v:
@@ -212,6 +218,8 @@ def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: 
         if n <= 0:
             continue
         for v, w, dv in ((a, b, d / n), (b, a, -d / n)):
+            if not border[v]:
+                continue
             pairs.setdefault(v, []).append(nn)
             if np.abs(fvn[start[v]:start[v + 1]] @ dv).max(initial=0.0) > corner:
                 continue  # a corner: the crease ends at v
