@@ -78,3 +78,39 @@ def test_box_corner_cut_off_comes_back_sharp():
     assert np.linalg.norm(out.vertices - HALF, axis=1).min() < 1e-3 * diag  # the corner itself is rebuilt
     tm = trimesh.Trimesh(out.vertices, out.faces, process=False)
     assert tm.is_watertight and tm.euler_number == 2
+
+
+def _cad_box() -> tuple[np.ndarray, np.ndarray, int, int]:
+    """A box triangulated as CAD exporters do (few large triangles): the top (z) and the +y side
+    each have one inner point, so the corners A and B of their common edge AB also belong to
+    triangles of both faces that do not touch AB. Returns (V, F, A, B)."""
+    hx, hy, hz = HALF
+    c = [(x, y, z) for x in (-hx, hx) for y in (-hy, hy) for z in (-hz, hz)]  # index = 4 ix + 2 iy + iz
+    V = np.array(c + [(0.1, 0.2, hz), (-0.2, hy, 0.1)], dtype=np.float64)  # P on top, Q on the +y side
+    P, Q = 8, 9
+    A, B = 3, 7  # (-hx, hy, hz), (hx, hy, hz)
+    F = [(A, B, P), (B, 5, P), (5, 1, P), (1, A, P),  # top z = hz: A B (hx,-hy,hz) (-hx,-hy,hz)
+         (A, B, Q), (B, 6, Q), (6, 2, Q), (2, A, Q),  # side y = hy
+         (0, 1, 3), (0, 3, 2), (4, 5, 7), (4, 7, 6), (0, 4, 5), (0, 5, 1), (0, 2, 6), (0, 6, 4)]
+    tm = trimesh.Trimesh(V, np.array(F), process=False)
+    trimesh.repair.fix_winding(tm)
+    trimesh.repair.fix_inversion(tm)
+    assert tm.is_watertight and tm.is_winding_consistent
+    return V, np.asarray(tm.faces, dtype=np.int64), A, B
+
+
+def test_edge_a_hole_removed_whole_is_rebuilt_from_the_corner_planes():
+    """The two triangles along AB removed: neither corner has a sharp edge pointing along AB, but
+    the top and side planes meet at both corners without an edge between them (missing_edges): the
+    ray from A along their intersection runs through B (crease_line), so AB comes back exactly."""
+    V, F, A, B = _cad_box()
+    along = np.array([sorted(f) in (sorted([A, B, 8]), sorted([A, B, 9])) for f in F.tolist()])
+    res = repair(normalize(V, F[~along]), RepairParams())
+    out = res.mesh
+    assert _box_distance(out.vertices).max() < 1e-9
+    crease = [b for b in res.bridges if b.kind == "crease"]
+    assert len(crease) == 1
+    on_edge = (np.abs(out.vertices[:, 1] - HALF[1]) < 1e-9) & (np.abs(out.vertices[:, 2] - HALF[2]) < 1e-9)
+    assert on_edge.sum() >= 3  # A, B and the chain between them
+    tm = trimesh.Trimesh(out.vertices, out.faces, process=False)
+    assert tm.is_watertight and tm.euler_number == 2
