@@ -492,7 +492,9 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             lines.append(line)
             pl = np.vstack([V[poly[i]], line.points[1:-1], V[poly[j]]])
             pts = resample_chain(pl, spacing)
-            if not len(pts):  # at least one chain vertex: a bare chord may already be an edge across a crease
+            if not len(pts) and pinned and np.isin(poly, np.concatenate(pinned)).any():
+                # beside a crease chain, at least one chain vertex: a bare chord may already be an
+                # edge of the patch across the crease
                 pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
             b = Bridge(int(poly[i]), int(poly[j]), pts, float(line.quality), "split", len(lines) - 1)
             chain_normals = _chain_normals(line, b.points)
