@@ -13,11 +13,12 @@ are joined through that point.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
+from .bridge_graph import resample_chain
 from .topology import face_adjacency
 
 
@@ -29,37 +30,78 @@ class CreaseEnds:
     directions: dict[int, list[NDArray[np.float64]]]
     others: dict[int, list[int]]
     normals: dict[int, list[NDArray[np.float64]]]  # (2, 3): the normals of the edge's two faces
+    circles: dict[int, list[Circle | None]] = field(default_factory=dict)  # a curved crease's circle
+    planes: dict[int, NDArray[np.float64]] = field(default_factory=dict)  # (P, 3) face planes at a vertex
+    edges: dict[int, list[NDArray[np.float64]]] = field(default_factory=dict)  # normal pairs of all sharp edges
+    moved: dict[int, set[int]] = field(default_factory=dict)  # border vertex -> the ends ``at`` moved to it
 
     def at(self, polygon: tuple[int, ...], V: NDArray[np.float64] | None = None,
-           along: float = 12.0) -> list[tuple[int, NDArray[np.float64], NDArray[np.float64]]]:
-        """(position, direction, face normals) of the crease ends on a hole polygon: sharp edges
-        that reach the polygon from outside it (an edge between two polygon vertices runs along
-        the border). With ``V``: where the border itself goes on along the crease (the next border
-        vertex within ``along`` degrees of the crease direction), the end moves along it, so that
-        no chain starts beside a border edge that already continues the crease."""
+           along: float = 12.0) -> list[tuple[int, NDArray[np.float64], NDArray[np.float64], Circle | None]]:
+        """(position, direction, face normals, circle) of the crease ends on a hole polygon: sharp
+        edges that reach the polygon from outside it (an edge between two polygon vertices runs
+        along the border). With ``V``: where the border itself goes on along the crease (the next
+        border vertex within ``along`` degrees of the crease direction), the end moves along it, so
+        that no chain starts beside a border edge that already continues the crease."""
         on = set(polygon)
-        out = [(k, d, n) for k, v in enumerate(polygon)
-               for d, w, n in zip(self.directions.get(int(v), ()), self.others.get(int(v), ()),
-                                  self.normals.get(int(v), ())) if w not in on]
+        out = [(k, d, n, c) for k, v in enumerate(polygon)
+               for d, w, n, c in zip(self.directions.get(int(v), ()), self.others.get(int(v), ()),
+                                     self.normals.get(int(v), ()), self.circles.get(int(v), _nones()))
+               if w not in on]
         if V is None:
             return out
         m, lim = len(polygon), np.cos(np.radians(along))
         moved = []
-        for k, d, n in out:
+        for k, d, n, c in out:
+            k0 = k
+            t = tangent(V[polygon[k]], d, c)  # a curved crease leaves along its circle's tangent
             for _ in range(m):  # sequential: walk while the border follows the crease
                 step = [k2 for k2 in ((k + 1) % m, (k - 1) % m)
-                        if float(d @ _unit(V[polygon[k2]] - V[polygon[k]])) > lim]
+                        if float(t @ _unit(V[polygon[k2]] - V[polygon[k]])) > lim]
                 if not step:
                     break
                 k = step[0]
-            moved.append((k, d, n))
+            if polygon[k] != polygon[k0]:
+                self.moved.setdefault(int(polygon[k]), set()).add(int(polygon[k0]))
+            moved.append((k, d, n, c))
         return moved
 
     def use(self, v: int) -> None:
-        """A crease end that has been continued: no other chain starts there."""
-        self.directions.pop(int(v), None)
-        self.others.pop(int(v), None)
-        self.normals.pop(int(v), None)
+        """A crease end that has been continued: no other chain starts there (nor from the ends
+        that were moved to it along the border)."""
+        for w in self.moved.pop(int(v), ()):
+            self.use(w)
+        for table in (self.directions, self.others, self.normals, self.circles, self.planes):
+            table.pop(int(v), None)
+
+
+def _nones():
+    while True:
+        yield None
+
+
+@dataclass(frozen=True)
+class Circle:
+    """A curved crease's circle: centre, radius and unit axis (the normal of its plane)."""
+
+    center: NDArray[np.float64]
+    radius: float
+    axis: NDArray[np.float64]
+
+    def same(self, other: Circle, tol: float = 0.05, max_tilt: float = 10.0) -> bool:
+        r = max(self.radius, other.radius)
+        return bool(np.linalg.norm(self.center - other.center) < tol * r and abs(self.radius - other.radius) < tol * r
+                    and abs(float(self.axis @ other.axis)) > np.cos(np.radians(max_tilt)))
+
+
+def circumcircle(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.float64]) -> Circle | None:
+    """The circle through three points (None when they are collinear)."""
+    ab, ac = b - a, c - a
+    n = np.cross(ab, ac)
+    nn = float(n @ n)
+    if nn <= 1e-24 * max(float(ab @ ab), float(ac @ ac)) ** 2:
+        return None
+    center = a + (float(ac @ ac) * np.cross(n, ab) + float(ab @ ab) * np.cross(ac, n)) / (2 * nn)
+    return Circle(center, float(np.linalg.norm(center - a)), n / np.sqrt(nn))
 
 
 def _unit(a: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -94,22 +136,122 @@ def sharp_edges(vertices: NDArray[np.float64], faces: NDArray[np.int64],
     return e, np.stack([fn[sharp[:, 0]], fn[sharp[:, 1]]], axis=1)
 
 
-def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: float) -> CreaseEnds:
+def _blocking(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """(vertex, unit normal) of every corner of every face: the faces around each vertex."""
+    f = np.asarray(faces, dtype=np.int64)
+    t = vertices[f]
+    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+    return f.ravel(), np.repeat(fn, 3, axis=0)
+
+
+def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: float, *,
+                corner: float = 0.5, min_bend: float = 3.0, max_bend: float = 40.0) -> CreaseEnds:
+    """The crease ends of the sharp input edges (``sharp_edges``): at each end vertex, the edge's
+    direction going on past it.
+
+    - An edge that ends at a corner of the part does not go on: when a face at the vertex faces
+      along the direction (|n . d| above ``corner``; the faces along a crease that merely stops at
+      the hole all contain d, so their normals are across it), a third surface closes the crease
+      there, and the vertex gives no crease end for it.
+    - A curved crease (the sharp edge before it turns by ``min_bend`` to ``max_bend`` degrees, and
+      the edge before that, where there is one, lies on the same circle) carries the circle through
+      its last three vertices: it is continued along that circle, never straight.
+    - ``planes``: the distinct face normals at every vertex; ``edges``: the normal pairs of every
+      sharp edge at a vertex (corners included), to find edges a hole removed whole.
+    """
     out: dict[int, list[NDArray[np.float64]]] = {}
     oth: dict[int, list[int]] = {}
     nrm: dict[int, list[NDArray[np.float64]]] = {}
+    circ: dict[int, list[Circle | None]] = {}
+    pairs: dict[int, list[NDArray[np.float64]]] = {}
+    planes: dict[int, NDArray[np.float64]] = {}
     edges, fn = sharp_edges(vertices, faces, angle)
+    if not len(edges):
+        return CreaseEnds(out, oth, nrm, circ, planes, pairs)
+    fv, fvn = _blocking(vertices, faces)
+    order = np.argsort(fv, kind="stable")
+    fv, fvn = fv[order], fvn[order]
+    start = np.searchsorted(fv, np.arange(len(vertices) + 1))
+    nbr: dict[int, list[int]] = {}
+    for a, b in edges.tolist():
+        nbr.setdefault(a, []).append(b)
+        nbr.setdefault(b, []).append(a)
+    lo, hi = np.cos(np.radians(min_bend)), np.cos(np.radians(max_bend))
+
+    def before(w: int, v: int) -> int | None:
+        """The sharp edge's neighbour at w that continues the chain ... -> w -> v most straight."""
+        d = _unit(vertices[v] - vertices[w])
+        best = max(((float(_unit(vertices[w] - vertices[u]) @ d), u) for u in nbr.get(w, ()) if u != v),
+                   default=None)
+        return best[1] if best is not None and best[0] > hi else None
+
+    def circle(v: int, w: int) -> Circle | None:
+        u = before(w, v)
+        if u is None or float(_unit(vertices[w] - vertices[u]) @ _unit(vertices[v] - vertices[w])) > lo:
+            return None
+        c = circumcircle(vertices[u], vertices[w], vertices[v])
+        t = before(u, w)
+        if c is None or t is None:  # a fourth point on the same circle, else a kink, not an arc
+            return None
+        if abs(float(np.linalg.norm(vertices[t] - c.center)) - c.radius) > 0.02 * c.radius \
+                or abs(float((vertices[t] - c.center) @ c.axis)) > 0.02 * c.radius:
+            return None
+        return c
+
+    # only vertices on the surface's border can be crease ends (a hole interrupts the crease there)
+    f = np.asarray(faces, dtype=np.int64)
+    e_all = np.sort(np.vstack([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    ue, cnt = np.unique(e_all, axis=0, return_counts=True)
+    border = np.zeros(len(vertices) + 1, dtype=bool)
+    border[ue[cnt == 1].ravel()] = True
+    for v in {int(x) for x in edges.ravel() if border[x]}:
+        fvn_v = fvn[start[v]:start[v + 1]]
+        keep: list[NDArray[np.float64]] = []
+        for n in fvn_v:
+            if all(float(n @ m) < 0.999 for m in keep):
+                keep.append(n)
+        planes[v] = np.array(keep)
     for (a, b), nn in zip(edges.tolist(), fn):
         d = vertices[a] - vertices[b]
         n = float(np.linalg.norm(d))
-        if n > 0:
-            out.setdefault(a, []).append(d / n)
-            out.setdefault(b, []).append(-d / n)
-            oth.setdefault(a, []).append(b)
-            oth.setdefault(b, []).append(a)
-            nrm.setdefault(a, []).append(nn)
-            nrm.setdefault(b, []).append(nn)
-    return CreaseEnds(out, oth, nrm)
+        if n <= 0:
+            continue
+        for v, w, dv in ((a, b, d / n), (b, a, -d / n)):
+            if not border[v]:
+                continue
+            pairs.setdefault(v, []).append(nn)
+            if np.abs(fvn[start[v]:start[v + 1]] @ dv).max(initial=0.0) > corner:
+                continue  # a corner: the crease ends at v
+            out.setdefault(v, []).append(dv)
+            oth.setdefault(v, []).append(w)
+            nrm.setdefault(v, []).append(nn)
+            circ.setdefault(v, []).append(circle(v, w))
+    return CreaseEnds(out, oth, nrm, circ, planes, pairs)
+
+
+def missing_edges(ends: CreaseEnds, v: int,
+                  angle: float = 40.0) -> list[tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """Edges of a corner that a hole removed whole: (direction, (2, 3) normals) for every two
+    face planes at ``v`` that meet at more than ``angle`` degrees but have no sharp edge at v
+    between them; both directions along the line where the planes meet (the caller keeps the one
+    that runs over the hole to another border vertex)."""
+    P = ends.planes.get(int(v))
+    if P is None or len(P) < 3:
+        return []
+    have = ends.edges.get(int(v), [])
+    lim = np.cos(np.radians(angle))
+    out = []
+    for x in range(len(P)):
+        for y in range(x + 1, len(P)):
+            if float(P[x] @ P[y]) > lim:
+                continue
+            pair = np.stack([P[x], P[y]])
+            if any(_shared(pair, h, 0.99) == 2 for h in have):
+                continue
+            d = _unit(np.cross(P[x], P[y]))
+            out += [(d, pair), (-d, pair)]
+    return out
 
 
 def hermite(p0: NDArray[np.float64], d0: NDArray[np.float64], p1: NDArray[np.float64], d1: NDArray[np.float64],
@@ -117,8 +259,6 @@ def hermite(p0: NDArray[np.float64], d0: NDArray[np.float64], p1: NDArray[np.flo
     """Interior points of the cubic Hermite curve from p0 (tangent d0) to p1 (tangent d1), tangents
     scaled by the chord length, evenly about ``spacing`` apart along the curve; at least one (a
     chain without interior points would be a chord that may already be an edge of the surface)."""
-    from .bridge_graph import resample_chain
-
     L = float(np.linalg.norm(p1 - p0))
     t = np.linspace(0.0, 1.0, 65)[:, None]  # dense, then resampled by arc length
     h00, h10, h01, h11 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t, -2 * t**3 + 3 * t**2, t**3 - t**2
@@ -142,17 +282,80 @@ def _interleaved(a: tuple[int, int], b: tuple[int, int]) -> bool:
     return (i < k < j) != (i < m < j) and len({i, j, k, m}) == 4
 
 
+def arc(p0: NDArray[np.float64], d0: NDArray[np.float64], p1: NDArray[np.float64], c: Circle,
+        spacing: float, max_step: float = 20.0) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """Interior points of the arc of circle ``c`` from p0 (leaving along d0) to p1, about
+    ``spacing`` apart and at most ``max_step`` degrees apart (so its chords stay near the circle),
+    and the arc's direction of travel at p1; None when d0 does
+    not run along the circle."""
+    e1 = _unit(p0 - c.center)
+    e2 = _unit(np.cross(c.axis, e1))
+    if float(d0 @ e2) < 0:
+        e2 = -e2
+    if float(d0 @ e2) < np.cos(np.radians(30.0)):
+        return None
+    q = p1 - c.center
+    phi = float(np.arctan2(q @ e2, q @ e1)) % (2 * np.pi)
+    if phi < 1e-3:
+        return None
+    m = max(2, int(round(c.radius * phi / max(spacing, 1e-12))), int(np.ceil(phi / np.radians(max_step))))
+    t = phi * np.arange(1, m)[:, None] / m
+    h = (p0 - c.center) @ c.axis  # the end points' heights over the circle's plane, blended
+    h1 = q @ c.axis
+    pts = c.center + c.radius * (np.cos(t) * e1 + np.sin(t) * e2) + (h + (h1 - h) * t / phi) * c.axis
+    return pts, -np.sin(phi) * e1 + np.cos(phi) * e2
+
+
+def tangent(p: NDArray[np.float64], d: NDArray[np.float64], c: Circle | None) -> NDArray[np.float64]:
+    """The direction in which a crease leaves its end p: d for a straight one; for a curved one
+    the circle's tangent at p (d is the direction of its last chord, half a step off), the way
+    a fillet ends tangent to the straight edge after it."""
+    if c is None:
+        return d
+    t = _unit(np.cross(c.axis, p - c.center))
+    return t if float(t @ d) >= 0 else -t
+
+
+def _ends(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, max_turn: float = 25.0
+          ) -> list[tuple[int, NDArray[np.float64], NDArray[np.float64], Circle | None]]:
+    """The crease ends on ``polygon`` (CreaseEnds.at), curved ones resolved: a curved end whose
+    circle leads to another end on the polygon (same circle, the arc arriving within ``max_turn``
+    degrees of that end's crease, head-on) is a circle the hole interrupts (it keeps its circle:
+    arc or nothing); any other curved end on its circle is an arc that ended (a fillet), and the
+    crease goes on straight along its tangent (circle None)."""
+    cand = ends.at(polygon, V)
+    lim = np.cos(np.radians(max_turn))
+
+    def joins(x: int, y: int) -> bool:  # the arc from end x along its crease arrives at end y head-on
+        (k, d, _, c), (k2, d2, _, c2) = cand[x], cand[y]
+        if y == x or c2 is None or k2 == k or not c.same(c2):
+            return False
+        got = arc(V[polygon[k]], d, V[polygon[k2]], c, 1.0)
+        return got is not None and float(got[1] @ -d2) > lim
+
+    out = []
+    for x, (k, d, n, c) in enumerate(cand):
+        if c is not None and not any(joins(x, y) for y in range(len(cand))):
+            d, c = tangent(V[polygon[k]], d, c), None
+        out.append((k, d, n, c))
+    return out
+
+
 def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, spacing: float, *,
-                 max_turn: float = 25.0, max_normal_turn: float = 30.0) -> CreaseSplit | None:
+                 max_turn: float = 25.0, max_normal_turn: float = 40.0, arcs: bool = False) -> CreaseSplit | None:
     """The best crease chain across the hole ``polygon``, or None.
 
     A crease end is a polygon vertex with a sharp input edge ending there; its direction d must
-    point into the hole. Ends i and j pair when the chord u from i to j is within ``max_turn``
-    degrees of d_i and of -d_j, and the two faces along the crease at i face like the two at j
-    (within ``max_normal_turn`` degrees: the same two surfaces meet there); the best pair (largest
-    d_i . u - d_j . u) is returned.
+    point into the hole. Straight ends i and j pair when the chord u from i to j is within
+    ``max_turn`` degrees of d_i and of -d_j, and the two faces along the crease at i face like the
+    two at j (within ``max_normal_turn`` degrees: the same two surfaces meet there); the best pair
+    (largest d_i . u - d_j . u) is returned. Two curved ends (``Circle``) pair when they lie on one
+    circle and the arc from i along d_i arrives at j along -d_j (within ``max_turn``); they are
+    joined along the arc (quality 2) when ``arcs`` is on (off by default: the band between two
+    arcs of one cylinder, e.g. a pocket's rim and floor, is then darned across the pocket's
+    opening by the minimum-area triangulation). Otherwise a curved end goes on along its tangent.
     """
-    cand = ends.at(polygon, V)
+    cand = _ends(V, polygon, ends)
     if len(cand) < 2:
         return None
     lim = np.cos(np.radians(max_turn))
@@ -161,8 +364,21 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
     n = len(polygon)
     for x in range(len(cand)):
         for y in range(x + 1, len(cand)):
-            (i, di, ni), (j, dj, nj) = cand[x], cand[y]
-            if min((i - j) % n, (j - i) % n) < 2 or _shared(ni, nj, nlim) < 2:
+            (i, di, ni, ci), (j, dj, nj, cj) = cand[x], cand[y]
+            if min((i - j) % n, (j - i) % n) < 2:
+                continue
+            if arcs and ci is not None and cj is not None and ci.same(cj):
+                if _shared(ni, nj, nlim) < 1:
+                    continue
+                got = arc(V[polygon[i]], di, V[polygon[j]], ci, spacing)
+                if got is None or float(got[1] @ -dj) < lim:
+                    continue
+                if best is None or 2.0 + float(got[1] @ -dj) > best[0]:
+                    best = (2.0 + float(got[1] @ -dj), i, j, got[0])
+                continue
+            if _shared(ni, nj, nlim) < 2:
+                continue
+            if ci is not None or cj is not None:  # a circle the hole interrupts: never straight
                 continue
             u = V[polygon[j]] - V[polygon[i]]
             L = float(np.linalg.norm(u))
@@ -171,29 +387,70 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
             u /= L
             a, b = float(di @ u), float(-dj @ u)
             if a > lim and b > lim and (best is None or a + b > best[0]):
-                best = (a + b, i, j, di, dj)
+                best = (a + b, i, j, hermite(V[polygon[i]], di, V[polygon[j]], -dj, spacing))
     if best is None:
         return None
-    q, i, j, di, dj = best
-    pts = hermite(V[polygon[i]], di, V[polygon[j]], -dj, spacing)
-    return CreaseSplit(int(i), int(j), pts, float(q))
+    q, i, j, pts = best
+    return CreaseSplit(int(i), int(j), pts, min(float(q), 2.0))
+
+
+def _on_line(V: NDArray[np.float64], polygon: tuple[int, ...], p: NDArray[np.float64], d: NDArray[np.float64],
+             skip: set[int], tol: float, both: bool = False) -> tuple[int, float] | None:
+    """The nearest polygon position (not in ``skip``) on the ray p + t d, t > 0 (either way with
+    ``both``), within ``tol`` times t of it: (position, t)."""
+    w = V[list(polygon)] - p
+    t = w @ d
+    perp = np.linalg.norm(w - t[:, None] * d, axis=1)
+    ok = (np.abs(t) if both else t) > 0
+    ok &= perp <= tol * np.abs(t)
+    ok[list(skip)] = False
+    if not ok.any():
+        return None
+    k = int(np.flatnonzero(ok)[np.argmin(np.abs(t[ok]))])
+    return k, float(t[k])
+
+
+def crease_line(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, spacing: float, *,
+                tol: float = 1e-3) -> CreaseSplit | None:
+    """A straight crease whose ray runs exactly through another border vertex (CAD edges: the
+    other end has no sharp edge of its own pointing back, e.g. the edge of a corner that the hole
+    removed whole, ``missing_edges``), or None. The nearest such pair wins."""
+    n = len(polygon)
+    rays = [(k, d) for k, d, _, c in _ends(V, polygon, ends) if c is None]
+    rays += [(k, d) for k, v in enumerate(polygon) for d, _ in missing_edges(ends, v)]
+    best = None
+    for k, d in rays:
+        hit = _on_line(V, polygon, V[polygon[k]], d, {(k + s) % n for s in (-1, 0, 1)}, tol)
+        if hit is not None and (best is None or hit[1] < best[0]):
+            best = (hit[1], k, hit[0])
+    if best is None:
+        return None
+    _, i, j = best
+    pts = resample_chain(np.vstack([V[polygon[i]], V[polygon[j]]]), spacing)
+    if not len(pts):
+        pts = ((V[polygon[i]] + V[polygon[j]]) / 2)[None]
+    return CreaseSplit(int(i), int(j), pts, 2.0)
 
 
 def crease_corner(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, spacing: float, *,
                   max_miss: float = 0.15, rays: int = 3, min_turn: float = 30.0,
-                  max_normal_turn: float = 30.0) -> tuple[CreaseSplit, int, NDArray[np.float64]] | None:
+                  max_normal_turn: float = 30.0, tol: float = 1e-3
+                  ) -> tuple[CreaseSplit, int, NDArray[np.float64], NDArray[np.float64] | None] | None:
     """``rays`` (3 or 2) crease ends whose rays meet near one point C (a corner of the part): the
     split from the first end through C to the second (C is a vertex of its chain), the position of
-    the third end (-1 for two rays: the crease turns at C), and C.
+    the third end (-1 when there is none: the crease turns at C), C, and the third edge's
+    direction (towards C).
 
     The rays p_k + t d_k (t > 0) must pass within ``max_miss`` times their length to C of C; two
     rays must turn by at least ``min_turn`` degrees (straight ones are crease_split's). Every two
     of the rays must border one common surface (a face normal of each within ``max_normal_turn``
-    degrees), as the edges of one corner do.
+    degrees), as the edges of one corner do (curved ends: as ``_ends`` resolves them). For two rays,
+    the corner's third edge runs where the two surfaces not shared meet: when a border vertex lies
+    on that line through C (within ``tol`` times its distance), it is the third end.
     """
     from itertools import combinations
 
-    cand = ends.at(polygon, V)
+    cand = [e for e in _ends(V, polygon, ends) if e[3] is None]
     if len(cand) < rays:
         return None
     pts = V[list(polygon)]
@@ -202,15 +459,15 @@ def crease_corner(V: NDArray[np.float64], polygon: tuple[int, ...], ends: Crease
     best = None
     for combo in combinations(range(len(cand)), rays):  # few crease ends per hole
         tri = [cand[c] for c in combo]
-        if len({k for k, _, _ in tri}) < rays:
+        if len({k for k, _, _, _ in tri}) < rays:
             continue
         if rays == 2 and abs(float(tri[0][1] @ tri[1][1])) > np.cos(np.radians(min_turn)):
             continue
         nlim = np.cos(np.radians(max_normal_turn))
         if any(_shared(p[2], q[2], nlim) != 1 for p, q in combinations(tri, 2)):
             continue
-        P = np.array([V[polygon[k]] for k, _, _ in tri])
-        D = np.array([d for _, d, _ in tri])
+        P = np.array([V[polygon[k]] for k, _, _, _ in tri])
+        D = np.array([d for _, d, _, _ in tri])
         # least-squares point nearest the lines: sum (I - d d^T) (C - p) = 0
         A = sum(np.eye(3) - np.outer(d, d) for d in D)
         rhs = sum((np.eye(3) - np.outer(d, d)) @ p for d, p in zip(D, P))
@@ -222,14 +479,25 @@ def crease_corner(V: NDArray[np.float64], polygon: tuple[int, ...], ends: Crease
         if np.any(t <= 0) or np.any(C < lo) or np.any(C > hi):
             continue
         miss = np.linalg.norm(P + t[:, None] * D - C, axis=1) / t
-        if np.all(miss < max_miss) and (best is None or miss.max() < best[0]):
-            best = (float(miss.max()), tri, C, t)
+        key = float(miss.max())  # the best meeting (the first found of equal ones)
+        if np.all(miss < max_miss) and (best is None or key < best[4]):
+            best = (float(miss.max()), tri, C, t, key)
     if best is None:
         return None
-    _, tri, C, t = best
-    (i, di, _), (j, dj, _) = tri[:2]
-    k = tri[2][0] if rays == 3 else -1
+    _, tri, C, t, _ = best
+    (i, di, ni, _), (j, dj, nj, _) = tri[:2]
+    k, dk = (tri[2][0], tri[2][1]) if rays == 3 else (-1, None)
+    if rays == 2:  # the third edge: the two normals that are not shared
+        nlim = np.cos(np.radians(max_normal_turn))
+        oi = [a for a in ni if not any(float(a @ b) > nlim for b in nj)]
+        oj = [b for b in nj if not any(float(a @ b) > nlim for a in ni)]
+        if len(oi) == 1 and len(oj) == 1 and abs(float(oi[0] @ oj[0])) < 0.9:
+            e = _unit(np.cross(oi[0], oj[0]))
+            hit = _on_line(V, polygon, C, e, {i, j}, tol, both=True)
+            if hit is not None:
+                k = hit[0]
+                dk = _unit(C - V[polygon[k]])
     a = hermite(V[polygon[i]], di, C, di, spacing)
     b = hermite(C, -dj, V[polygon[j]], -dj, spacing)
     pts = np.vstack([a, C[None], b])
-    return CreaseSplit(int(i), int(j), pts, float(3 - 3 * best[0])), int(k), C
+    return CreaseSplit(int(i), int(j), pts, float(3 - 3 * best[0])), int(k), C, dk

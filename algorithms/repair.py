@@ -33,7 +33,7 @@ from .bridge_graph import (
     split_polygon,
     walk_holes,
 )
-from .creases import CreaseEnds, crease_corner, crease_ends, crease_split, hermite
+from .creases import CreaseEnds, crease_corner, crease_ends, crease_line, crease_split, hermite
 from .fragments import Attached, attach_fragments, fragment_bridge
 from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
@@ -438,13 +438,16 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     ends = crease_ends(mesh.vertices, mesh.faces, params.crease_angle) if params.crease_angle < 180 else None
     pinned: list[NDArray[np.int64]] = []  # crease chain vertices: the fairing keeps them where they are
     locked: list[NDArray[np.int64]] = []  # crease chain edges: never flipped
+    # guard: each continuation uses up its crease ends, so there are at most as many as ends
+    n_creased, max_creased = 0, (len(ends.directions) + len(ends.planes) if ends is not None else 0)
     while queue:
         step(0.5, f"splitting complex holes ({len(queue)} to check)")
         poly, origin, depth = queue.pop(0)
         V, N = work.V(), work.N()
         verdict = classify_hole(V[list(poly)], N[list(poly)], test)
-        if ends is not None and len(set(poly)) == len(poly):
+        if ends is not None and len(set(poly)) == len(poly) and n_creased < max_creased:
             halves = _continue_creases(work, poly, ends, spacing)
+            n_creased += halves is not None
             if halves is not None:
                 new_bridges, parts, chain_ids = halves
                 for b in new_bridges:
@@ -488,8 +491,12 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             line, i, j = split
             lines.append(line)
             pl = np.vstack([V[poly[i]], line.points[1:-1], V[poly[j]]])
-            b = Bridge(int(poly[i]), int(poly[j]), resample_chain(pl, spacing), float(line.quality), "split",
-                       len(lines) - 1)
+            pts = resample_chain(pl, spacing)
+            if not len(pts) and pinned and np.isin(poly, np.concatenate(pinned)).any():
+                # beside a crease chain, at least one chain vertex: a bare chord may already be an
+                # edge of the patch across the crease
+                pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
+            b = Bridge(int(poly[i]), int(poly[j]), pts, float(line.quality), "split", len(lines) - 1)
             chain_normals = _chain_normals(line, b.points)
         ids = work.add_vertices(b.points, chain_normals)
         bridges.append(b)
@@ -706,7 +713,7 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
         ids = work.add_vertices(pts, np.repeat(nrm[None], len(pts), axis=0))
         return Bridge(int(p[i]), int(p[j]), pts, q, "crease"), ids
 
-    straight = crease_split(V, poly, ends, spacing)
+    straight = crease_split(V, poly, ends, spacing) or crease_line(V, poly, ends, spacing)
     if straight is not None:
         b, ids = chain(straight.i, straight.j, straight.points, straight.quality, poly)
         for v in (poly[straight.i], poly[straight.j]):
@@ -715,7 +722,7 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     corner = crease_corner(V, poly, ends, spacing) or crease_corner(V, poly, ends, spacing, rays=2)
     if corner is None:
         return None
-    cs, k, C = corner
+    cs, k, C, dk = corner
     b1, ids1 = chain(cs.i, cs.j, cs.points, cs.quality, poly)
     a, c = split_polygon(poly, cs.i, cs.j, ids1)
     if k < 0:  # two rays: the crease turns at C
@@ -726,7 +733,6 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     c_id = int(ids1[int(np.argmin(np.linalg.norm(b1.points - C, axis=1)))])
     half, other = (a, c) if vk in a else (c, a)
     i, j = half.index(vk), half.index(c_id)
-    dk = next(d for p, d, _ in ends.at(poly, V) if p == k)
     b2, ids2 = chain(i, j, hermite(V[vk], dk, C, dk, spacing), cs.quality, half)
     h1, h2 = split_polygon(half, i, j, ids2)
     for v in (poly[cs.i], poly[cs.j], vk):

@@ -1,0 +1,116 @@
+"""Crease continuation across holes (algorithms.creases) on boxes with known geometry."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from algorithms.creases import Circle, circumcircle, crease_ends, tangent
+from algorithms.mesh import Mesh
+from algorithms.normalize import normalize
+from algorithms.repair import RepairParams, repair
+from algorithms.topology import boundary_loops
+
+HALF = np.array([1.0, 0.75, 0.5])  # half extents of the box
+
+
+def _box(levels: int = 3) -> Mesh:
+    b = trimesh.creation.box(extents=2 * HALF)
+    for _ in range(levels):
+        b = b.subdivide()
+    return Mesh(np.asarray(b.vertices, dtype=np.float64), np.asarray(b.faces, dtype=np.int64))
+
+
+def _box_distance(p: np.ndarray) -> np.ndarray:
+    """Unsigned distance of points to the surface of the box (analytic)."""
+    q = np.abs(p) - HALF
+    outside = np.linalg.norm(np.maximum(q, 0), axis=1)
+    inside = np.minimum(q.max(axis=1), 0)
+    return np.abs(outside + inside)
+
+
+def _repaired(keep: np.ndarray, mode: str = "light"):
+    box = _box()
+    used = np.unique(box.faces[keep])
+    remap = np.full(box.n_vertices, -1)
+    remap[used] = np.arange(len(used))
+    V, F = box.vertices[used], remap[box.faces[keep]]
+    res = repair(normalize(V, F), RepairParams())
+    return V, F, res
+
+
+def test_circumcircle_and_tangent_are_exact():
+    ang = np.radians([10.0, 40.0, 75.0])
+    c0 = np.array([0.3, -1.0, 2.0])
+    pts = c0 + 2.0 * np.stack([np.cos(ang), np.sin(ang), np.zeros(3)], axis=1)
+    c = circumcircle(*pts)
+    assert np.allclose(c.center, c0) and c.radius == pytest.approx(2.0)
+    assert abs(abs(c.axis[2]) - 1) < 1e-12
+    t = tangent(pts[2], np.array([-1.0, 0.2, 0.0]), c)  # continues counter-clockwise
+    assert np.allclose(t, [-np.sin(ang[2]), np.cos(ang[2]), 0.0])
+    assert circumcircle(pts[0], pts[0] + 1, pts[0] + 2) is None  # collinear
+    assert Circle(c0, 2.0, np.array([0, 0, 1.0])).same(Circle(c0 + 0.01, 2.02, np.array([0, 0.05, 1.0])))
+
+
+def test_corner_ends_point_at_the_corner_and_stop_at_corners():
+    box = _box()
+    corner = HALF.copy()
+    cen = box.vertices[box.faces].mean(axis=1)
+    keep = np.linalg.norm(cen - corner, axis=1) > 0.45
+    F = box.faces[keep]
+    ends = crease_ends(box.vertices, F, 40.0)
+    loop = boundary_loops(F)[0]
+    found = ends.at(tuple(int(v) for v in loop))
+    assert len(found) == 3  # the three edges into the corner, nothing else (the other corners are whole)
+    for k, d, _, circle in found:
+        to_corner = corner - box.vertices[loop[k]]
+        assert circle is None
+        assert float(d @ to_corner / np.linalg.norm(to_corner)) > 1 - 1e-9
+
+
+def test_box_corner_cut_off_comes_back_sharp():
+    box = _box()
+    cen = box.vertices[box.faces].mean(axis=1)
+    keep = np.linalg.norm(cen - HALF, axis=1) > 0.45
+    V, F, res = _repaired(keep)
+    out = res.mesh
+    diag = float(np.linalg.norm(2 * HALF))
+    assert _box_distance(out.vertices).max() < 1e-3 * diag
+    assert np.linalg.norm(out.vertices - HALF, axis=1).min() < 1e-3 * diag  # the corner itself is rebuilt
+    tm = trimesh.Trimesh(out.vertices, out.faces, process=False)
+    assert tm.is_watertight and tm.euler_number == 2
+
+
+def _cad_box() -> tuple[np.ndarray, np.ndarray, int, int]:
+    """A box triangulated as CAD exporters do (few large triangles): the top (z) and the +y side
+    each have one inner point, so the corners A and B of their common edge AB also belong to
+    triangles of both faces that do not touch AB. Returns (V, F, A, B)."""
+    hx, hy, hz = HALF
+    c = [(x, y, z) for x in (-hx, hx) for y in (-hy, hy) for z in (-hz, hz)]  # index = 4 ix + 2 iy + iz
+    V = np.array(c + [(0.1, 0.2, hz), (-0.2, hy, 0.1)], dtype=np.float64)  # P on top, Q on the +y side
+    P, Q = 8, 9
+    A, B = 3, 7  # (-hx, hy, hz), (hx, hy, hz)
+    F = [(A, B, P), (B, 5, P), (5, 1, P), (1, A, P),  # top z = hz: A B (hx,-hy,hz) (-hx,-hy,hz)
+         (A, B, Q), (B, 6, Q), (6, 2, Q), (2, A, Q),  # side y = hy
+         (0, 1, 3), (0, 3, 2), (4, 5, 7), (4, 7, 6), (0, 4, 5), (0, 5, 1), (0, 2, 6), (0, 6, 4)]
+    tm = trimesh.Trimesh(V, np.array(F), process=False)
+    trimesh.repair.fix_winding(tm)
+    trimesh.repair.fix_inversion(tm)
+    assert tm.is_watertight and tm.is_winding_consistent
+    return V, np.asarray(tm.faces, dtype=np.int64), A, B
+
+
+def test_edge_a_hole_removed_whole_is_rebuilt_from_the_corner_planes():
+    """The two triangles along AB removed: neither corner has a sharp edge pointing along AB, but
+    the top and side planes meet at both corners without an edge between them (missing_edges): the
+    ray from A along their intersection runs through B (crease_line), so AB comes back exactly."""
+    V, F, A, B = _cad_box()
+    along = np.array([sorted(f) in (sorted([A, B, 8]), sorted([A, B, 9])) for f in F.tolist()])
+    res = repair(normalize(V, F[~along]), RepairParams())
+    out = res.mesh
+    assert _box_distance(out.vertices).max() < 1e-9
+    crease = [b for b in res.bridges if b.kind == "crease"]
+    assert len(crease) == 1
+    on_edge = (np.abs(out.vertices[:, 1] - HALF[1]) < 1e-9) & (np.abs(out.vertices[:, 2] - HALF[2]) < 1e-9)
+    assert on_edge.sum() >= 3  # A, B and the chain between them
+    tm = trimesh.Trimesh(out.vertices, out.faces, process=False)
+    assert tm.is_watertight and tm.euler_number == 2
