@@ -156,6 +156,14 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
             a, b = pos[he[both, 0]], pos[he[both, 1]]
             forbidden[a, b] = True
             forbidden[b, a] = True
+    # copies of one point on the loop (a non-manifold vertex that normalisation split) must not be
+    # joined: a chord between them has length 0 and every triangle on it has area 0, which the
+    # area weight would prefer
+    d = v[lp][:, None, :] - v[lp][None, :, :]
+    same = np.einsum("ijk,ijk->ij", d, d) <= (1e-12 * float(np.ptp(v[lp], axis=0).max(initial=0.0))) ** 2
+    np.fill_diagonal(same, False)
+    if same.any():
+        forbidden = same if forbidden is None else forbidden | same
     normals = None
     if weight == "dihedral":
         normals = _outside_normals(v, ring, lp)

@@ -134,14 +134,20 @@ def _dp_fast(p: NDArray[np.float64], weight: str,
     if weight == "length":
         CS = CT = np.zeros((3, 0, 0))
     else:
-        DS = DT = np.zeros((0, 0))
+        # a triangle of three collinear (or coincident) loop points has area 0, so the area weight
+        # would prefer it (CAD borders have runs of collinear vertices): it costs `pen`, more than
+        # any whole patch, so it is used only when no triangulation avoids it (never for a simple
+        # planar polygon)
+        DS = np.sum((q[:, None, :] - q[fwd]) ** 2, axis=2)  # |v_i - v_{i+j}|^2
+        DT = DS[bwd, r[None, :]]
+    pen = 1e6 * float(np.sum(np.ptp(q, axis=0) ** 2))
     fb = np.zeros((0, 0), dtype=np.bool_) if forbidden is None else np.ascontiguousarray(forbidden, dtype=np.bool_)
-    _dp_diagonals(CS, CT, DS, DT, weight == "length", fb, forbidden is not None, S, T, M)
+    _dp_diagonals(CS, CT, DS, DT, weight == "length", fb, forbidden is not None, S, T, M, pen)
     return float(S[0, n - 1]), M
 
 
 @numba.njit(cache=True)
-def _dp_diagonals(CS, CT, DS, DT, length, forbidden, has_forbidden, S, T, M):  # pragma: no cover - compiled
+def _dp_diagonals(CS, CT, DS, DT, length, forbidden, has_forbidden, S, T, M, pen):  # pragma: no cover - compiled
     """The diagonals of _dp_fast, compiled: for diagonal d and row i (k = i + d), the candidate
     m = i + j (j = 1..d-1) costs S[i, j] + T[k, d-j] + the triangle (i, m, k)'s weight, summed in
     the order the vectorised form used; the first minimum wins (np.argmin's rule)."""
@@ -161,6 +167,10 @@ def _dp_diagonals(CS, CT, DS, DT, length, forbidden, has_forbidden, S, T, M):  #
                         nc = CS[a, i, j] + CT[a, k, d - j] - CS[a, i, d]
                         sq += nc * nc
                     c = c + 0.5 * np.sqrt(sq)
+                    # |(v_m - v_i) x (v_k - v_i)| = |v_m - v_i| |v_k - v_i| sin(angle at v_i): zero
+                    # (to 1e-6 relative) exactly when the triangle is degenerate
+                    if sq <= 1e-12 * DS[i, j] * DS[i, d]:
+                        c = c + pen
                 if c < best:
                     best = c
                     bj = j - 1

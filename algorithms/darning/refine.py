@@ -122,6 +122,10 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
     area = 0.5 * float(np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
     max_faces = budget * (len(f) + area / (np.sqrt(3) / 4 * fill * fill)) if fill > 0 else np.inf
     rounds = 0
+    # obtuse-edge splitting rounds are capped: an obtuse angle at a vertex nearly on a long border
+    # edge survives every halving of the edge across it (each midpoint as flat as the last), and
+    # the midpoints would converge until they coincide
+    obtuse_rounds = 0
     while rounds < max_rounds:  # sequential: split, relax, repeat (frep.md §4)
         rounds += 1
         P = np.vstack(pts) if len(pts) > 1 else pts[0]
@@ -150,8 +154,9 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
             f, nflip = relax(P, f, fixed_faces)
             flips += nflip
         if not ns and not nflip:
-            if obtuse is None or len(f) > max_faces:
+            if obtuse is None or len(f) > max_faces or obtuse_rounds >= 6:
                 break
+            obtuse_rounds += 1
             P = np.vstack(pts) if len(pts) > 1 else pts[0]
             f, lab, mids, lm = _split_obtuse(P, f, lab, lv, nv, np.radians(obtuse))
             if not len(mids):
