@@ -666,6 +666,12 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
             if m > before and (best is None or m > best[0]):
                 best = (m, both, nf)
         if best is None:
+            # no collapse keeps the link condition and helps (e.g. c and its nearest neighbour
+            # share a third one): move c to where its star's smallest angle is largest
+            if _move_best(p, star, int(c), before):
+                done += 1
+            continue
+        if best is None:
             continue
         _, both, nf = best
         f = f.copy()
@@ -673,3 +679,44 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
         f = np.delete(f, rows[both], axis=0)
         done += 1
     return f, done
+
+
+def _move_best(p: NDArray[np.float64], star: NDArray[np.int64], c: int, before: float, *, grid: int = 21,
+               levels: int = 4, gain: float = np.radians(0.1)) -> bool:
+    """Move vertex ``c`` (in place) to the point of its star's tangent plane where the smallest angle
+    of its faces is largest, when that beats ``before`` by ``gain`` (radians) and folds no face: a
+    grid search over the disc its ring spans (``grid`` x ``grid`` points), refined ``levels`` times
+    around the best point. The umbrella and equilateral-apex steps of :func:`_smooth_bad` look in
+    two directions only; a vertex squeezed against a border vertex may need to move across its star
+    (bunny scan: 9.8 -> 40 degrees where no collapse kept the surface a manifold)."""
+    t = p[star]
+    n_old = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    nrm = n_old.sum(axis=0)
+    nn = float(np.linalg.norm(nrm))
+    if nn == 0:
+        return False
+    nrm /= nn
+    e1 = np.cross(nrm, np.eye(3)[int(np.argmin(np.abs(nrm)))])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(nrm, e1)
+    at = star == c
+    half = float(np.linalg.norm(p[np.unique(star)] - p[c], axis=1).max())
+    centre = p[c].copy()
+    best_m, best_x = before + gain, None
+    g = np.linspace(-1.0, 1.0, grid)
+    for _ in range(levels):
+        a, b = np.meshgrid(g * half, g * half)
+        x = centre + a.reshape(-1, 1) * e1 + b.reshape(-1, 1) * e2  # (K, 3)
+        tt = np.broadcast_to(t, (len(x),) + t.shape).copy()
+        tt[:, at] = np.repeat(x, at.sum(), axis=0).reshape(len(x), -1, 3)
+        n2 = np.cross(tt[:, :, 1] - tt[:, :, 0], tt[:, :, 2] - tt[:, :, 0])
+        score = _tri_angles(tt).min(axis=(1, 2))
+        score[(np.einsum("kij,ij->ki", n2, n_old) <= 0).any(axis=1)] = -1.0  # a fold
+        k = int(np.argmax(score))
+        if score[k] > best_m:
+            best_m, best_x = float(score[k]), x[k]
+        if best_x is None:
+            return False
+        centre, half = best_x, half * 2.0 / (grid - 1) * 2
+    p[c] = best_x
+    return True

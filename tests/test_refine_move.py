@@ -1,0 +1,51 @@
+"""darning.refine: a free vertex squeezed against a ring vertex, where no collapse keeps the surface a
+manifold, is moved to the best point of its star (refine._move_best, refine._collapse_bad)."""
+
+import sys
+
+import numpy as np
+
+import algorithms.darning  # noqa: F401  (the package re-exports a function named refine)
+
+R = sys.modules["algorithms.darning.refine"]
+
+
+def _hexagon(squeeze: float):
+    """A regular hexagon ring (unit radius, z = 0), the centre vertex 6 moved ``squeeze`` of the way to
+    ring vertex 0: its star's smallest angle is tiny."""
+    ang = np.arange(6) * np.pi / 3
+    ring = np.stack([np.cos(ang), np.sin(ang), np.zeros(6)], axis=1)
+    p = np.vstack([ring, [[squeeze, 0.0, 0.0]]])
+    star = np.array([[6, i, (i + 1) % 6] for i in range(6)], dtype=np.int64)
+    return p, star
+
+
+def test_move_best_finds_the_centre_of_a_regular_hexagon():
+    p, star = _hexagon(0.95)
+    before = R.corner_angles(p, star).min()
+    assert np.degrees(before) < 5
+    assert R._move_best(p, star, 6, before)
+    # the centre is the only point where all six faces are equilateral (60 degrees)
+    assert np.linalg.norm(p[6]) < 0.02
+    assert np.degrees(R.corner_angles(p, star).min()) > 59.0
+    assert np.allclose(p[:6, 2], 0) and abs(p[6, 2]) < 1e-12  # in the star's plane
+
+
+def test_move_best_refuses_when_nothing_is_better():
+    p, star = _hexagon(0.0)
+    q = p.copy()
+    assert not R._move_best(p, star, 6, R.corner_angles(p, star).min())
+    assert np.array_equal(p, q)
+
+
+def test_collapse_bad_moves_when_every_collapse_breaks_the_link_condition():
+    p, star = _hexagon(0.95)
+    # fixed faces joining every second ring vertex: each ring vertex shares a third neighbour with
+    # the centre, so no collapse of the centre keeps the surface a manifold
+    fixed = np.array([[i, (i + 2) % 6, (i + 1) % 6] for i in range(6)], dtype=np.int64)
+    free = np.r_[np.zeros(6, dtype=bool), True]
+    before = np.degrees(R.corner_angles(p, star).min())
+    f, done = R._collapse_bad(p, star, fixed, None, free, np.arange(6))
+    assert done == 1
+    assert np.array_equal(f, star)  # topology unchanged: the vertex moved
+    assert before < 5 and np.degrees(R.corner_angles(p, f).min()) > 59.0
