@@ -496,6 +496,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 # beside a crease chain, at least one chain vertex: a bare chord may already be an
                 # edge of the patch across the crease
                 pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
+                if np.linalg.norm(V[list(poly)] - pts[0], axis=1).min() <= 1e-9 * spacing:
+                    pts = pts[:0]  # an earlier split already put its vertex there: no second copy
             b = Bridge(int(poly[i]), int(poly[j]), pts, float(line.quality), "split", len(lines) - 1)
             chain_normals = _chain_normals(line, b.points)
         ids = work.add_vertices(b.points, chain_normals)
