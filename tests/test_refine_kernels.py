@@ -8,9 +8,71 @@ import pytest
 
 from algorithms.cases import cap, cut, icosphere
 from algorithms.darning import refine, triangulate
-from algorithms.darning.refine import _smooth_bad, _unchangeable
+from algorithms.darning.refine import _tri_angles, _unchangeable
 from algorithms.darning.refine_kernels import corner_angles, smooth_bad, unchangeable
 from algorithms.topology import boundary_loops
+
+
+# the numpy loop the compiled kernel replaced, kept here as its reference
+def _smooth_bad(p, f, free, bad, *, tries=3, gain=0.1 * np.pi / 180):
+    """Move the free vertices of the bad faces, in place, to raise the smallest angle of their faces
+    (smart Laplacian smoothing, in the vertex's tangent plane): candidates are the umbrella step
+    towards the centroid of the neighbours (fair.tangential_relax's step) and, for the face of the
+    star with the smallest angle, the apex of the equilateral triangle on its edge opposite the
+    vertex, each at full, half and quarter length; the best candidate that raises the star's
+    smallest angle by more than ``gain`` (radians) without folding a face is kept. A free vertex near
+    a fixed edge, where no point may be inserted (the encroachment rule of :func:`_insert`), can
+    only be moved. Returns the number of moves kept."""
+    cand = np.unique(f[bad])
+    cand = cand[free[cand]]
+    if not len(cand):
+        return 0
+    order = np.argsort(f.ravel(), kind="stable")
+    flat = f.ravel()[order]
+    start = np.searchsorted(flat, cand)
+    stop = np.searchsorted(flat, cand, side="right")
+    kept = 0
+    steps = np.array([1.0, 0.5, 0.25])
+    for _ in range(tries):  # sequential: each vertex moves against its neighbours' current positions
+        moved = 0
+        for c, s0, s1 in zip(cand, start, stop):
+            star = f[order[s0:s1] // 3]
+            nb = star[star != c]  # each neighbour twice (in two faces of the star) unless on its rim
+            t = p[star]
+            nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
+            nn = np.linalg.norm(nrm)
+            if not len(nb) or nn == 0:
+                continue
+            nrm /= nn
+            ang = _tri_angles(t)
+            before = ang.min()
+            # the face with the smallest angle: the equilateral apex on its edge opposite c
+            w = star[int(np.argmin(ang.min(axis=1)))]
+            kc = int(np.flatnonzero(w == c)[0])
+            ea, eb = p[w[(kc + 1) % 3]], p[w[(kc + 2) % 3]]
+            e = eb - ea
+            side = np.cross(nrm, e)
+            side /= max(float(np.linalg.norm(side)), 1e-300)
+            if side @ (p[c] - (ea + eb) / 2) < 0:
+                side = -side
+            apex = (ea + eb) / 2 + np.sqrt(3) / 2 * float(np.linalg.norm(e)) * side
+            dl = np.stack([p[nb].mean(axis=0) - p[c], apex - p[c]])
+            dl -= (dl @ nrm)[:, None] * nrm
+            trial = p[c] + (steps[None, :, None] * dl[:, None, :]).reshape(-1, 3)  # (6, 3)
+            tt = np.broadcast_to(t, (len(trial),) + t.shape).copy()
+            tt[:, star == c] = trial[:, None, :]
+            n2 = np.cross(tt[:, :, 1] - tt[:, :, 0], tt[:, :, 2] - tt[:, :, 0])
+            score = _tri_angles(tt).min(axis=(1, 2))
+            score[((n2 @ nrm) <= 0).any(axis=1)] = -1.0  # a fold
+            b = int(np.argmax(score))
+            if score[b] > before + gain:
+                p[c] = trial[b]
+                moved += 1
+        kept += moved
+        if not moved:
+            break
+    return kept
+
 
 
 def jittered_patch(seed: int):

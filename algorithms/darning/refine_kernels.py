@@ -36,7 +36,7 @@ def _angles_into(t: np.ndarray, out: np.ndarray) -> None:
 @numba.njit(cache=True)
 def _smooth_rounds(p: np.ndarray, f: np.ndarray, cand: np.ndarray, order: np.ndarray, start: np.ndarray,
                    stop: np.ndarray, tries: int, gain: float) -> int:
-    """refine._smooth_bad's rounds on the candidates ``cand`` (stars: faces order[start:stop] // 3);
+    """the reference smoothing loop's rounds on the candidates ``cand`` (stars: faces order[start:stop] // 3);
     moves p in place, returns the number of moves kept."""
     kmax = 0
     for q in range(cand.shape[0]):
@@ -150,7 +150,8 @@ def _smooth_rounds(p: np.ndarray, f: np.ndarray, cand: np.ndarray, order: np.nda
 
 def smooth_bad(p: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.bool_], bad: NDArray[np.int64], *,
                tries: int = 3, gain: float = float(np.radians(0.1))) -> int:
-    """refine._smooth_bad compiled: the same candidates, stars, trial points and acceptance rule;
+    """The numpy smoothing loop (its reference in tests/test_refine_kernels.py) compiled: the same
+    candidates, stars, trial points and acceptance rule;
     moves the free vertices of the bad faces in place and returns the number of moves kept."""
     f = np.ascontiguousarray(f, dtype=np.int64)
     cand = np.unique(f[bad])
