@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-ORDER = ("info", "demos", "bridges", "repair", "hybrid", "frep")  # listing order in --help
+ORDER = ("info", "demos", "bridges", "repair", "hybrid", "frep", "warmup")  # listing order in --help
 
 
 def _discover() -> tuple[str, ...]:
