@@ -71,8 +71,10 @@ class CreaseEnds:
         that were moved to it along the border)."""
         for w in self.moved.pop(int(v), ()):
             self.use(w)
-        for table in (self.directions, self.others, self.normals, self.circles, self.planes):
+        for table in (self.directions, self.others, self.normals, self.circles):
             table.pop(int(v), None)
+        # the face planes stay: another edge of a corner may still be missing there (crease_line
+        # does not follow a ray along which the border, e.g. this chain, already runs)
 
 
 def _nones():
@@ -474,6 +476,9 @@ def crease_line(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEn
     rays += [(k, d) for k, v in enumerate(polygon) for d, _ in missing_edges(ends, v)]
     found = []
     for k, d in rays:
+        nb = V[[polygon[(k - 1) % n], polygon[(k + 1) % n]]] - V[polygon[k]]
+        if (nb @ d > (1 - tol) * np.linalg.norm(nb, axis=1)).any():
+            continue  # the border (an earlier chain, a border edge) already runs along the ray
         hit = _on_line(V, polygon, V[polygon[k]], d, {(k + s) % n for s in (-1, 0, 1)}, tol)
         if hit is not None:
             found.append((hit[1], k, hit[0]))
