@@ -13,6 +13,7 @@ are joined through that point.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -70,8 +71,10 @@ class CreaseEnds:
         that were moved to it along the border)."""
         for w in self.moved.pop(int(v), ()):
             self.use(w)
-        for table in (self.directions, self.others, self.normals, self.circles, self.planes):
+        for table in (self.directions, self.others, self.normals, self.circles):
             table.pop(int(v), None)
+        # the face planes stay: another edge of a corner may still be missing there (crease_line
+        # does not follow a ray along which the border, e.g. this chain, already runs)
 
 
 def _nones():
@@ -267,6 +270,9 @@ def hermite(p0: NDArray[np.float64], d0: NDArray[np.float64], p1: NDArray[np.flo
     return resample_chain(curve, min(spacing, length / 2))
 
 
+Valid = Callable[[int, int, NDArray[np.float64]], bool]  # (position i, position j or -1, chain points)
+
+
 @dataclass(frozen=True)
 class CreaseSplit:
     """Split a hole polygon at positions i and j by a chain through ``points`` (interior points)."""
@@ -275,6 +281,54 @@ class CreaseSplit:
     j: int
     points: NDArray[np.float64]
     quality: float  # how well the two directions point at each other (2 = exactly)
+
+
+class Surface:
+    """The input surface a crease chain must not run over: a chain continues a crease across the
+    hole, so apart from its two end vertices it lies in the hole, never on an input face (a chain
+    on a face, e.g. two crease rays that meet beyond the hole's border, crosses the border and
+    makes a self-overlapping decomposition: featuretype's corner chain ran 0.9 units over the top
+    face)."""
+
+    def __init__(self, vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> None:
+        f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+        self.t = np.asarray(vertices, dtype=np.float64)[f]  # (F, 3, 3)
+        self.lo, self.hi = self.t.min(axis=1), self.t.max(axis=1)
+
+    def covers(self, points: NDArray[np.float64], tol: float, margin: float = 0.02) -> NDArray[np.bool_]:
+        """(K,) whether each point lies within ``tol`` of an input face and projects strictly inside
+        it (every barycentric coordinate above ``margin``: a point beside the hole's border edge
+        projects onto that edge, not inside the face)."""
+        q = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        out = np.zeros(len(q), dtype=bool)
+        for i, x in enumerate(q):  # few chain points; each against the faces whose box holds it
+            near = np.flatnonzero(np.all((self.lo - tol <= x) & (x <= self.hi + tol), axis=1))
+            if not len(near):
+                continue
+            t = self.t[near]
+            e0, e1, w = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0], x - t[:, 0]
+            n = np.cross(e0, e1)
+            nn = np.linalg.norm(n, axis=1)
+            ok = nn > 0
+            h = np.abs(np.einsum("ij,ij->i", w, n)) / np.maximum(nn, 1e-300)
+            d00, d01, d11 = (e0 * e0).sum(1), (e0 * e1).sum(1), (e1 * e1).sum(1)
+            d20, d21 = (w * e0).sum(1), (w * e1).sum(1)
+            den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
+            s = (d11 * d20 - d01 * d21) / den
+            r = (d00 * d21 - d01 * d20) / den
+            out[i] = bool((ok & (h <= tol) & (s > margin) & (r > margin) & (1 - s - r > margin)).any())
+        return out
+
+    def crossed_by(self, p0: NDArray[np.float64], pts: NDArray[np.float64], p1: NDArray[np.float64],
+                   tol: float, step: float) -> bool:
+        """Whether the chain p0 -> pts -> p1, sampled about ``step`` apart, runs over an input face."""
+        poly = np.vstack([p0[None], np.asarray(pts).reshape(-1, 3), p1[None]])
+        dense = [poly[:1]]
+        for a, b in zip(poly[:-1], poly[1:]):
+            k = max(1, int(np.ceil(float(np.linalg.norm(b - a)) / max(step, 1e-12))))
+            dense.append(a + (b - a) * (np.arange(1, k + 1)[:, None] / k))
+        x = np.vstack(dense)[1:-1]
+        return bool(len(x) and self.covers(x, tol).any())
 
 
 def _interleaved(a: tuple[int, int], b: tuple[int, int]) -> bool:
@@ -342,7 +396,8 @@ def _ends(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, ma
 
 
 def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, spacing: float, *,
-                 max_turn: float = 25.0, max_normal_turn: float = 40.0, arcs: bool = False) -> CreaseSplit | None:
+                 max_turn: float = 25.0, max_normal_turn: float = 40.0, arcs: bool = False,
+                 valid: Valid | None = None) -> CreaseSplit | None:
     """The best crease chain across the hole ``polygon``, or None.
 
     A crease end is a polygon vertex with a sharp input edge ending there; its direction d must
@@ -354,13 +409,15 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
     joined along the arc (quality 2) when ``arcs`` is on (off by default: the band between two
     arcs of one cylinder, e.g. a pocket's rim and floor, is then darned across the pocket's
     opening by the minimum-area triangulation). Otherwise a curved end goes on along its tangent.
+    ``valid(i, j, points)``: a chain it refuses (e.g. one that runs over the input surface,
+    ``Surface``) is not taken; the next best pair is.
     """
     cand = _ends(V, polygon, ends)
     if len(cand) < 2:
         return None
     lim = np.cos(np.radians(max_turn))
     nlim = np.cos(np.radians(max_normal_turn))
-    best = None
+    found: list[tuple[float, int, int, NDArray[np.float64]]] = []
     n = len(polygon)
     for x in range(len(cand)):
         for y in range(x + 1, len(cand)):
@@ -373,8 +430,7 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
                 got = arc(V[polygon[i]], di, V[polygon[j]], ci, spacing)
                 if got is None or float(got[1] @ -dj) < lim:
                     continue
-                if best is None or 2.0 + float(got[1] @ -dj) > best[0]:
-                    best = (2.0 + float(got[1] @ -dj), i, j, got[0])
+                found.append((2.0 + float(got[1] @ -dj), i, j, got[0]))
                 continue
             if _shared(ni, nj, nlim) < 2:
                 continue
@@ -386,12 +442,12 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
                 continue
             u /= L
             a, b = float(di @ u), float(-dj @ u)
-            if a > lim and b > lim and (best is None or a + b > best[0]):
-                best = (a + b, i, j, hermite(V[polygon[i]], di, V[polygon[j]], -dj, spacing))
-    if best is None:
-        return None
-    q, i, j, pts = best
-    return CreaseSplit(int(i), int(j), pts, min(float(q), 2.0))
+            if a > lim and b > lim:
+                found.append((a + b, i, j, hermite(V[polygon[i]], di, V[polygon[j]], -dj, spacing)))
+    for q, i, j, pts in sorted(found, key=lambda x: -x[0]):  # the best pair first (stable for ties)
+        if valid is None or valid(i, j, pts):
+            return CreaseSplit(int(i), int(j), pts, min(float(q), 2.0))
+    return None
 
 
 def _on_line(V: NDArray[np.float64], polygon: tuple[int, ...], p: NDArray[np.float64], d: NDArray[np.float64],
@@ -411,30 +467,33 @@ def _on_line(V: NDArray[np.float64], polygon: tuple[int, ...], p: NDArray[np.flo
 
 
 def crease_line(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, spacing: float, *,
-                tol: float = 1e-3) -> CreaseSplit | None:
+                tol: float = 1e-3, valid: Valid | None = None) -> CreaseSplit | None:
     """A straight crease whose ray runs exactly through another border vertex (CAD edges: the
     other end has no sharp edge of its own pointing back, e.g. the edge of a corner that the hole
-    removed whole, ``missing_edges``), or None. The nearest such pair wins."""
+    removed whole, ``missing_edges``), or None. The nearest such pair that ``valid`` accepts wins."""
     n = len(polygon)
     rays = [(k, d) for k, d, _, c in _ends(V, polygon, ends) if c is None]
     rays += [(k, d) for k, v in enumerate(polygon) for d, _ in missing_edges(ends, v)]
-    best = None
+    found = []
     for k, d in rays:
+        nb = V[[polygon[(k - 1) % n], polygon[(k + 1) % n]]] - V[polygon[k]]
+        if (nb @ d > (1 - tol) * np.linalg.norm(nb, axis=1)).any():
+            continue  # the border (an earlier chain, a border edge) already runs along the ray
         hit = _on_line(V, polygon, V[polygon[k]], d, {(k + s) % n for s in (-1, 0, 1)}, tol)
-        if hit is not None and (best is None or hit[1] < best[0]):
-            best = (hit[1], k, hit[0])
-    if best is None:
-        return None
-    _, i, j = best
-    pts = resample_chain(np.vstack([V[polygon[i]], V[polygon[j]]]), spacing)
-    if not len(pts):
-        pts = ((V[polygon[i]] + V[polygon[j]]) / 2)[None]
-    return CreaseSplit(int(i), int(j), pts, 2.0)
+        if hit is not None:
+            found.append((hit[1], k, hit[0]))
+    for _, i, j in sorted(found, key=lambda x: x[0]):
+        pts = resample_chain(np.vstack([V[polygon[i]], V[polygon[j]]]), spacing)
+        if not len(pts):
+            pts = ((V[polygon[i]] + V[polygon[j]]) / 2)[None]
+        if valid is None or valid(i, j, pts):
+            return CreaseSplit(int(i), int(j), pts, 2.0)
+    return None
 
 
 def crease_corner(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, spacing: float, *,
                   max_miss: float = 0.15, rays: int = 3, min_turn: float = 30.0,
-                  max_normal_turn: float = 30.0, tol: float = 1e-3
+                  max_normal_turn: float = 30.0, tol: float = 1e-3, valid: Valid | None = None
                   ) -> tuple[CreaseSplit, int, NDArray[np.float64], NDArray[np.float64] | None] | None:
     """``rays`` (3 or 2) crease ends whose rays meet near one point C (a corner of the part): the
     split from the first end through C to the second (C is a vertex of its chain), the position of
@@ -480,6 +539,11 @@ def crease_corner(V: NDArray[np.float64], polygon: tuple[int, ...], ends: Crease
             continue
         miss = np.linalg.norm(P + t[:, None] * D - C, axis=1) / t
         key = float(miss.max())  # the best meeting (the first found of equal ones)
+        if valid is not None and np.all(miss < max_miss) and (best is None or key < best[4]):
+            # each leg to C must stay in the hole (``valid``: e.g. not over the input surface)
+            legs = [hermite(V[polygon[k]], d, C, d, spacing) for k, d, _, _ in tri]
+            if not all(valid(k, -1, np.vstack([lg, C[None]])) for (k, _, _, _), lg in zip(tri, legs)):
+                continue
         if np.all(miss < max_miss) and (best is None or key < best[4]):
             best = (float(miss.max()), tri, C, t, key)
     if best is None:

@@ -116,3 +116,48 @@ def test_edge_a_hole_removed_whole_is_rebuilt_from_the_corner_planes():
     assert on_edge.sum() >= 3  # A, B and the chain between them
     tm = trimesh.Trimesh(out.vertices, out.faces, process=False)
     assert tm.is_watertight and tm.euler_number == 2
+
+
+def test_an_edge_removed_whole_beside_a_continued_crease_comes_back():
+    """A ball around the middle of the box's vertical edge (x, y) = (hx, hy) removes that edge from
+    corner to corner and the ends of the top and bottom edges at those corners: the top and bottom
+    creases are continued to the corners first, and the corners keep their face planes, so the
+    vertical edge (missing_edges + crease_line) is rebuilt too; the patch is the box exactly (the
+    corners' planes were dropped with their used crease ends before: the vertical edge was rounded
+    off, 0.082 units = 3 % of the diagonal) and its triangles are well shaped."""
+    from algorithms.metrics import min_angles
+
+    box = _box()
+    cen = box.vertices[box.faces].mean(axis=1)
+    keep = np.linalg.norm(cen - HALF * np.array([1.0, 1.0, 0.0]), axis=1) > 0.45
+    V, F, res = _repaired(keep)
+    out = res.mesh
+    assert _box_distance(out.vertices).max() < 1e-9
+    crease = [b for b in res.bridges if b.kind == "crease"]
+    assert len(crease) == 3
+    on_edge = (np.abs(out.vertices[:, 0] - HALF[0]) < 1e-9) & (np.abs(out.vertices[:, 1] - HALF[1]) < 1e-9)
+    assert on_edge.sum() >= 3  # the two corners and the vertical chain between them
+    ang = min_angles(out.vertices, out.faces[res.new_faces])
+    assert ang.min() >= 15.0
+    tm = trimesh.Trimesh(out.vertices, out.faces, process=False)
+    assert tm.is_watertight and tm.euler_number == 2
+
+
+def test_surface_covers_points_on_faces_not_beside_the_border():
+    """creases.Surface: a point on an input face (strictly inside it) is covered, a point in the
+    hole or on the extension of a border edge is not; a chain over the surface is refused."""
+    from algorithms.creases import Surface
+
+    g = np.stack(np.meshgrid(np.arange(4.0), np.arange(4.0), indexing="ij"), axis=-1).reshape(-1, 2)
+    V = np.c_[g, np.zeros(len(g))]
+    idx = np.arange(16).reshape(4, 4)
+    F = [(idx[i, j], idx[i + 1, j], idx[i + 1, j + 1]) for i in range(3) for j in range(3)]
+    F += [(idx[i, j], idx[i + 1, j + 1], idx[i, j + 1]) for i in range(3) for j in range(3)]
+    F = np.array([f for f in F if not np.allclose(V[list(f)].mean(axis=0)[:2], [1.5, 1.5], atol=0.5)])
+    s = Surface(V, F)  # the unit square (1..2, 1..2) is the hole
+    got = s.covers(np.array([[0.4, 0.3, 0.0], [1.5, 1.5, 0.0], [1.5, 1.0, 0.0], [0.4, 0.3, 0.5]]), tol=1e-6)
+    assert got.tolist() == [True, False, False, False]
+    a, b = V[idx[1, 1]], V[idx[2, 2]]
+    assert not s.crossed_by(a, ((a + b) / 2)[None], b, 1e-6, 0.1)  # the diagonal across the hole
+    c = V[idx[3, 2]]
+    assert s.crossed_by(a, ((a + c) / 2)[None], c, 1e-6, 0.1)  # across the hole, then over the faces x > 2
