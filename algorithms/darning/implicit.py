@@ -54,12 +54,8 @@ class RBFImplicit:
 
     def value_gradient(self, x: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(f(x) (K,), grad f(x) (K, 3)) in one pass over the centres."""
-        q = np.asarray(x, dtype=np.float64).reshape(-1, 3)
-        diff = q[:, None, :] - self.centres[None]
-        d = np.sqrt(np.einsum("qmd,qmd->qm", diff, diff))
-        wd = d * self.weights[None]  # w_i |x - c_i|
-        val = np.einsum("qm,qm->q", wd, d * d) + self.affine[0] + q @ self.affine[1:]
-        return val, 3.0 * np.einsum("qm,qmd->qd", wd, diff) + self.affine[1:]
+        q = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(-1, 3))
+        return _rbf_eval(q, self.centres, self.weights, self.affine)
 
     def project(self, x: NDArray[np.float64], *, iterations: int = 4,
                 reach: float = np.inf) -> NDArray[np.float64]:
@@ -82,6 +78,43 @@ class RBFImplicit:
         bad = ~np.isfinite(q).all(axis=1) | (np.linalg.norm(q - x0, axis=1) > reach)
         q[bad] = x0[bad]
         return q
+
+
+    def project_along(self, x: NDArray[np.float64], directions: NDArray[np.float64], *, reach: float,
+                      samples: int = 16, iterations: int = 20) -> NDArray[np.float64]:
+        """Each point moved along its line x + t d (d a unit direction, e.g. the fill's normal) to
+        the zero crossing of f nearest to t = 0 with |t| <= ``reach``: f sampled at ``samples``
+        steps each way, the first sign change bracketed and bisected ``iterations`` times. A point
+        whose line meets no zero within reach stays. Unlike the gradient steps of ``project``,
+        which from inside a thin part run to the nearer wall, this lifts a fill that cut across a
+        rim (its normals point to the missing rim) out to it."""
+        q = np.array(x, dtype=np.float64, copy=True).reshape(-1, 3)
+        d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+        d = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+        if not len(q) or reach <= 0:
+            return q
+        ts = np.linspace(0.0, reach, samples + 1)
+        ts = np.r_[0.0, np.ravel(np.c_[ts[1:], -ts[1:]])]  # 0, +h, -h, +2h, -2h, ...: nearest first
+        f = self.value((q[:, None, :] + ts[None, :, None] * d[:, None, :]).reshape(-1, 3)).reshape(len(q), -1)
+        f0 = f[:, :1]
+        pos, neg = f[:, 1::2], f[:, 2::2]  # sign changes between t = 0 and +kh, or 0 and -kh
+        plus = np.argmax(np.sign(np.c_[f0, pos[:, :-1]]) != np.sign(pos), axis=1)
+        minus = np.argmax(np.sign(np.c_[f0, neg[:, :-1]]) != np.sign(neg), axis=1)
+        has_p = (np.sign(np.c_[f0, pos[:, :-1]]) != np.sign(pos)).any(axis=1)
+        has_m = (np.sign(np.c_[f0, neg[:, :-1]]) != np.sign(neg)).any(axis=1)
+        h = reach / samples
+        use_p = has_p & (~has_m | (plus <= minus))
+        lo = np.where(use_p, plus * h, -minus * h)  # bracket [lo, hi] on the chosen side (signed t)
+        hi = np.where(use_p, (plus + 1) * h, -(minus + 1) * h)
+        ok = (has_p | has_m) & (f0[:, 0] != 0)
+        flo = self.value(q + lo[:, None] * d)
+        for _ in range(iterations):  # sequential: bisection
+            mid = (lo + hi) / 2
+            fm = self.value(q + mid[:, None] * d)
+            same = np.sign(fm) == np.sign(flo)
+            lo, flo, hi = np.where(same, mid, lo), np.where(same, fm, flo), np.where(same, hi, mid)
+        t = np.where(ok, (lo + hi) / 2, 0.0)
+        return q + t[:, None] * d
 
 
 def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacing: float,
@@ -123,6 +156,33 @@ def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacin
     if not np.all(np.isfinite(sol)):
         raise np.linalg.LinAlgError("singular RBF system")
     return RBFImplicit(c, sol[:m], sol[m:])
+
+
+@numba.njit(cache=True)
+def _rbf_eval(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.float64],
+              a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:  # pragma: no cover
+    """f(q) = sum_i w_i |q - c_i|^3 + a0 + a.q and its gradient 3 sum_i w_i |q - c_i| (q - c_i) + a,
+    compiled: a fill's lines are sampled at tens of thousands of points against hundreds of centres."""
+    val = np.empty(len(q))
+    grad = np.empty((len(q), 3))
+    for k in range(len(q)):
+        v = a[0] + a[1] * q[k, 0] + a[2] * q[k, 1] + a[3] * q[k, 2]
+        g0, g1, g2 = a[1], a[2], a[3]
+        for i in range(len(c)):
+            d0 = q[k, 0] - c[i, 0]
+            d1 = q[k, 1] - c[i, 1]
+            d2 = q[k, 2] - c[i, 2]
+            r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            wr = w[i] * r
+            v += wr * r * r
+            g0 += 3.0 * wr * d0
+            g1 += 3.0 * wr * d1
+            g2 += 3.0 * wr * d2
+        val[k] = v
+        grad[k, 0] = g0
+        grad[k, 1] = g1
+        grad[k, 2] = g2
+    return val, grad
 
 
 @numba.njit(cache=True)
@@ -176,30 +236,58 @@ def opposite_normals(normals: NDArray[np.float64], *, cos_bound: float = -0.95) 
     return bool((n @ n.T).min() < cos_bound)
 
 
+def fill_normals(v: NDArray[np.float64], faces: NDArray[np.int64], which: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Area-weighted vertex normals of ``faces`` at the vertices ``which`` (unnormalised)."""
+    fn = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])
+    acc = np.zeros((len(v), 3))
+    for k in range(3):
+        np.add.at(acc, faces[:, k], fn)
+    return acc[which]
+
+
+def folded(rbf: RBFImplicit, V: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """Which ``faces`` face against the implicit's gradient at their corners (f grows outward, module
+    docstring; on the zero set the gradient is the surface normal): a fill moved onto the zero set
+    that folded over itself there."""
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    n = np.cross(V[f[:, 1]] - V[f[:, 0]], V[f[:, 2]] - V[f[:, 0]])
+    g = rbf.gradient(V[f].reshape(-1, 3))
+    g = (g / np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)).reshape(-1, 3, 3).sum(axis=1)
+    return np.einsum("ij,ij->i", n, g) <= 0
+
+
 def refine_onto(rbf: RBFImplicit, V: NDArray[np.float64], patch: NDArray[np.int64], fixed: NDArray[np.int64],
                 which: NDArray[np.int64], *, spacing: float, reach: float = np.inf, rounds: int = 2,
-                smooth: int = 3) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+                smooth: int = 3, along_normals: bool = False) -> tuple[NDArray[np.float64], NDArray[np.int64],
+                                                                          NDArray[np.int64]]:
     """Bring a fill onto the implicit in rounds: project the fill vertices ``which``, then (each
     round) refine the ``patch`` faces at the edge length ``spacing`` (refine.py: a cap that rose
     over a hole is larger than the flat fill it came from, its faces split), project again and
     relax tangentially (fair.tangential_relax), projecting once more after it. ``fixed``: the faces
-    around the patch (never changed). Returns (vertices, patch faces, the fill vertices: ``which``
-    and the ones added)."""
+    around the patch (never changed). ``along_normals``: each vertex moves along the fill's normal
+    there (RBFImplicit.project_along: a fill that cut across a thin rim is lifted out to the rim)
+    instead of down the gradient (to the nearest wall). Returns (vertices, patch faces, the fill
+    vertices: ``which`` and the ones added)."""
     from .fair import tangential_relax
     from .refine import refine
+
+    def onto(v: NDArray[np.float64], f: NDArray[np.int64], w: NDArray[np.int64]) -> NDArray[np.float64]:
+        if along_normals and np.isfinite(reach):
+            return rbf.project_along(v[w], fill_normals(v, np.vstack([fixed, f]), w), reach=reach)
+        return rbf.project(v[w], reach=reach)
 
     v = np.array(V, dtype=np.float64, copy=True)
     f = np.asarray(patch, dtype=np.int64).reshape(-1, 3)
     w = np.asarray(which, dtype=np.int64)
-    v[w] = rbf.project(v[w], reach=reach)
+    v[w] = onto(v, f, w)
     for _ in range(rounds):  # sequential: each round refines the surface the last one projected
         r = refine(v, fixed, f, scale=np.full(len(v), spacing))
         if not r.splits:
             break
         w = np.concatenate([w, np.arange(len(v), len(r.vertices))])
         v, f = np.array(r.vertices, copy=True), r.faces
-        v[w] = rbf.project(v[w], reach=reach)
+        v[w] = onto(v, f, w)
         if smooth:
             v = tangential_relax(v, np.vstack([fixed, f]), w, iterations=smooth)
-            v[w] = rbf.project(v[w], reach=reach)
+            v[w] = onto(v, f, w)
     return v, f, w
