@@ -596,22 +596,28 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 mine = np.isin(new, which).any(axis=1)
                 around = F[:n_before][np.isin(F[:n_before], new[mine]).any(axis=1)]
                 around = np.vstack([around, new[~mine][np.isin(new[~mine], new[mine]).any(axis=1)]])
-                V2, pf, grown = refine_onto(rbf, V, new[mine], around, which, spacing=spacing, reach=reach,
-                                            along_normals=band, rounds=4 if band else 2)
-                if band and folded(rbf, V2, pf).mean() > folded(rbf, V, new[mine]).mean() + fold_margin:
+                # a band: lines along the fill's normals as they are and averaged twice over the faces (a
+                # fill pulled through jittered free points has noisy normals), the lift folding less kept
+                tries = [refine_onto(rbf, V, new[mine], around, which, spacing=spacing, reach=reach,
+                                     along_normals=band, rounds=4 if band else 2, normal_smoothing=sm)
+                         for sm in ((0, 2) if band else (0,))]
+                folds = [float(folded(rbf, t[0], t[1]).mean()) for t in tries] if band else [0.0]
+                best = int(np.argmin(folds))
+                if band and folds[best] > folded(rbf, V, new[mine]).mean() + fold_margin:
                     queue += fallback  # lifting the band folded its fill over: its holes one by one
                     continue
-                V, F = V2, np.vstack([F[:n_before], new[~mine], pf])
-                tips.append((rbf, grown, reach, band))
+                V, pf, grown = tries[best]
+                F = np.vstack([F[:n_before], new[~mine], pf])
+                tips.append((rbf, grown, reach, band, 2 * best))
             timings_note["fairing"] += f" + RBF on {len(tips)} thin parts ({sum(t[3] for t in tips)} bands)"
             movable = np.unique(np.concatenate([movable, np.arange(n_input, len(V))]))
             movable = np.setdiff1d(movable, keep_still)
         V = tangential_relax(V, F[n_before:], movable, iterations=params.smooth)
         if fit is not None and len(moved):  # relaxed along the curved surface's tangent planes: back onto it
             V, _ = fit.project(V, moved)
-        for rbf, which, reach, band in tips:  # a band along the fill's normals (implicit.refine_onto)
-            V[which] = rbf.project_along(V[which], fill_normals(V, F[n_before:], which), reach=min(reach, spacing)) \
-                if band else rbf.project(V[which], reach=reach)
+        for rbf, which, reach, band, sm in tips:  # a band along the fill's normals (implicit.refine_onto)
+            V[which] = rbf.project_along(V[which], fill_normals(V, F[n_before:], which, smooth=sm),
+                                         reach=min(reach, spacing)) if band else rbf.project(V[which], reach=reach)
         fixed = F[:n_before]
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
         # then Delaunay refinement for the angles (darning.refine_angles: flips first, points only

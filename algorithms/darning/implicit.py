@@ -236,13 +236,24 @@ def opposite_normals(normals: NDArray[np.float64], *, cos_bound: float = -0.95) 
     return bool((n @ n.T).min() < cos_bound)
 
 
-def fill_normals(v: NDArray[np.float64], faces: NDArray[np.int64], which: NDArray[np.int64]) -> NDArray[np.float64]:
-    """Area-weighted vertex normals of ``faces`` at the vertices ``which`` (unnormalised)."""
-    fn = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])
+def fill_normals(v: NDArray[np.float64], faces: NDArray[np.int64], which: NDArray[np.int64], *,
+                 smooth: int = 1) -> NDArray[np.float64]:
+    """Area-weighted vertex normals of ``faces`` at the vertices ``which`` (unit), averaged ``smooth``
+    times over the faces around each vertex (a fill pulled through jittered free points has noisy
+    normals; the lines along them must still point across the missing surface)."""
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
     acc = np.zeros((len(v), 3))
     for k in range(3):
-        np.add.at(acc, faces[:, k], fn)
-    return acc[which]
+        np.add.at(acc, f[:, k], fn)
+    for _ in range(smooth):  # sequential: each pass averages the last one's unit normals over the faces
+        unit = acc / np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-300)
+        per_face = unit[f].sum(axis=1)
+        acc = np.zeros((len(v), 3))
+        for k in range(3):
+            np.add.at(acc, f[:, k], per_face)
+    out = acc[which]
+    return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-300)
 
 
 def folded(rbf: RBFImplicit, V: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.bool_]:
@@ -258,7 +269,8 @@ def folded(rbf: RBFImplicit, V: NDArray[np.float64], faces: NDArray[np.int64]) -
 
 def refine_onto(rbf: RBFImplicit, V: NDArray[np.float64], patch: NDArray[np.int64], fixed: NDArray[np.int64],
                 which: NDArray[np.int64], *, spacing: float, reach: float = np.inf, rounds: int = 2,
-                smooth: int = 3, along_normals: bool = False) -> tuple[NDArray[np.float64], NDArray[np.int64],
+                smooth: int = 3, along_normals: bool = False, normal_smoothing: int = 0
+                ) -> tuple[NDArray[np.float64], NDArray[np.int64],
                                                                           NDArray[np.int64]]:
     """Bring a fill onto the implicit in rounds: project the fill vertices ``which``, then (each
     round) refine the ``patch`` faces at the edge length ``spacing`` (refine.py: a cap that rose
@@ -266,14 +278,16 @@ def refine_onto(rbf: RBFImplicit, V: NDArray[np.float64], patch: NDArray[np.int6
     relax tangentially (fair.tangential_relax), projecting once more after it. ``fixed``: the faces
     around the patch (never changed). ``along_normals``: each vertex moves along the fill's normal
     there (RBFImplicit.project_along: a fill that cut across a thin rim is lifted out to the rim)
-    instead of down the gradient (to the nearest wall). Returns (vertices, patch faces, the fill
+    instead of down the gradient (to the nearest wall), its normals averaged ``normal_smoothing``
+    times over the faces (fill_normals). Returns (vertices, patch faces, the fill
     vertices: ``which`` and the ones added)."""
     from .fair import tangential_relax
     from .refine import refine
 
     def onto(v: NDArray[np.float64], f: NDArray[np.int64], w: NDArray[np.int64]) -> NDArray[np.float64]:
         if along_normals and np.isfinite(reach):
-            return rbf.project_along(v[w], fill_normals(v, np.vstack([fixed, f]), w), reach=reach)
+            return rbf.project_along(v[w], fill_normals(v, np.vstack([fixed, f]), w, smooth=normal_smoothing),
+                                     reach=reach)
         return rbf.project(v[w], reach=reach)
 
     v = np.array(V, dtype=np.float64, copy=True)
