@@ -836,7 +836,7 @@ def _thin_tips(V: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int, N:
     qualifies when the input normals around it face opposite ways and at least ``surrounded`` of its
     outer loop is input border (where bridge chains bound much of it, the implicit would extrapolate
     into the missing surface beyond them). The implicit interpolates the input vertices within
-    ``rings`` rings of the loop (at most ``max_points`` per hole, evenly thinned); the fill vertices
+    ``rings`` rings of the loop (at most ``max_points``, twice that for a band, evenly thinned); the fill vertices
     are the region's patches and the chains inside it; reach: the loop's radius.
 
     A band (a region of several holes) cut across a thin part, e.g. a rim: the fairing spans the rim
@@ -899,7 +899,7 @@ def _thin_tip(V: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int, N: 
     for _ in range(n_rings):
         sel[F_in[sel[F_in].any(axis=1)].ravel()] = True
     pts = np.flatnonzero(sel)
-    cap = max_points * len(ks)
+    cap = max_points * min(len(ks), 2)  # a dense solve: a band reads at most twice a hole's points
     if len(pts) > cap:
         pts = pts[np.linspace(0, len(pts) - 1, cap).astype(np.int64)]
     which = np.setdiff1d(np.concatenate([*(patch_ids[k] for k in ks), chains[count > 1]]), keep_still)

@@ -93,27 +93,33 @@ class RBFImplicit:
         d = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
         if not len(q) or reach <= 0:
             return q
-        ts = np.linspace(0.0, reach, samples + 1)
-        ts = np.r_[0.0, np.ravel(np.c_[ts[1:], -ts[1:]])]  # 0, +h, -h, +2h, -2h, ...: nearest first
-        f = self.value((q[:, None, :] + ts[None, :, None] * d[:, None, :]).reshape(-1, 3)).reshape(len(q), -1)
-        f0 = f[:, :1]
-        pos, neg = f[:, 1::2], f[:, 2::2]  # sign changes between t = 0 and +kh, or 0 and -kh
-        plus = np.argmax(np.sign(np.c_[f0, pos[:, :-1]]) != np.sign(pos), axis=1)
-        minus = np.argmax(np.sign(np.c_[f0, neg[:, :-1]]) != np.sign(neg), axis=1)
-        has_p = (np.sign(np.c_[f0, pos[:, :-1]]) != np.sign(pos)).any(axis=1)
-        has_m = (np.sign(np.c_[f0, neg[:, :-1]]) != np.sign(neg)).any(axis=1)
         h = reach / samples
-        use_p = has_p & (~has_m | (plus <= minus))
-        lo = np.where(use_p, plus * h, -minus * h)  # bracket [lo, hi] on the chosen side (signed t)
-        hi = np.where(use_p, (plus + 1) * h, -(minus + 1) * h)
-        ok = (has_p | has_m) & (f0[:, 0] != 0)
-        flo = self.value(q + lo[:, None] * d)
+        f0 = self.value(q)
+        lo = np.zeros(len(q))  # bracket [lo, hi] of the chosen side (signed t), found step by step
+        hi = np.zeros(len(q))
+        flo = f0.copy()
+        found = f0 == 0
+        act = np.flatnonzero(~found)
+        for k in range(1, samples + 1):  # sequential: outward in steps of h, both sides, nearest first
+            if not len(act):
+                break
+            for side in (1.0, -1.0):
+                if not len(act):
+                    break
+                fk = self.value(q[act] + (side * k * h) * d[act])
+                hit = np.sign(fk) != np.sign(f0[act])
+                idx = act[hit]
+                lo[idx], hi[idx], flo[idx] = side * (k - 1) * h, side * k * h, f0[idx]
+                found[idx] = True
+                act = act[~hit]
+        idx = np.flatnonzero(found & (f0 != 0))
         for _ in range(iterations):  # sequential: bisection
-            mid = (lo + hi) / 2
-            fm = self.value(q + mid[:, None] * d)
-            same = np.sign(fm) == np.sign(flo)
-            lo, flo, hi = np.where(same, mid, lo), np.where(same, fm, flo), np.where(same, hi, mid)
-        t = np.where(ok, (lo + hi) / 2, 0.0)
+            mid = (lo[idx] + hi[idx]) / 2
+            fm = self.value(q[idx] + mid[:, None] * d[idx])
+            same = np.sign(fm) == np.sign(flo[idx])
+            lo[idx], flo[idx], hi[idx] = np.where(same, mid, lo[idx]), np.where(same, fm, flo[idx]), \
+                np.where(same, hi[idx], mid)
+        t = np.where(found, (lo + hi) / 2, 0.0)
         return q + t[:, None] * d
 
 
