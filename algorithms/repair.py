@@ -596,19 +596,24 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 mine = np.isin(new, which).any(axis=1)
                 around = F[:n_before][np.isin(F[:n_before], new[mine]).any(axis=1)]
                 around = np.vstack([around, new[~mine][np.isin(new[~mine], new[mine]).any(axis=1)]])
-                # a band: lines along the fill's normals as they are and averaged twice over the faces (a
-                # fill pulled through jittered free points has noisy normals), the lift folding less kept
-                tries = [refine_onto(rbf, V, new[mine], around, which, spacing=spacing, reach=reach,
-                                     along_normals=band, rounds=4 if band else 2, normal_smoothing=sm)
-                         for sm in ((0, 2) if band else (0,))]
-                folds = [float(folded(rbf, t[0], t[1]).mean()) for t in tries] if band else [0.0]
+                # a band: lines along the fill's normals averaged twice over the faces (a fill pulled through
+                # jittered free points has noisy normals), or, if that folds the fill, as they are; the lift
+                # folding less kept
+                bound = folded(rbf, V, new[mine]).mean() + fold_margin if band else np.inf
+                tries, folds = [], []
+                for sm in (2, 0) if band else (0,):
+                    tries.append(refine_onto(rbf, V, new[mine], around, which, spacing=spacing, reach=reach,
+                                             along_normals=band, rounds=4 if band else 2, normal_smoothing=sm))
+                    folds.append(float(folded(rbf, tries[-1][0], tries[-1][1]).mean()) if band else 0.0)
+                    if folds[-1] <= bound:
+                        break
                 best = int(np.argmin(folds))
-                if band and folds[best] > folded(rbf, V, new[mine]).mean() + fold_margin:
+                if folds[best] > bound:
                     queue += fallback  # lifting the band folded its fill over: its holes one by one
                     continue
                 V, pf, grown = tries[best]
                 F = np.vstack([F[:n_before], new[~mine], pf])
-                tips.append((rbf, grown, reach, band, 2 * best))
+                tips.append((rbf, grown, reach, band, 2 - 2 * best))
             timings_note["fairing"] += f" + RBF on {len(tips)} thin parts ({sum(t[3] for t in tips)} bands)"
             movable = np.unique(np.concatenate([movable, np.arange(n_input, len(V))]))
             movable = np.setdiff1d(movable, keep_still)
