@@ -8,7 +8,7 @@ import numpy as np
 from algorithms import cases, metrics
 from algorithms.boundary import vertex_normals
 from algorithms.darning import apply_patch, darn, fair
-from algorithms.darning.implicit import fit_rbf, opposite_normals, refine_onto
+from algorithms.darning.implicit import fit_rbf, folded, opposite_normals, refine_onto
 from algorithms.darning.samples import free_samples, principal_normals, snap_to_samples
 from algorithms.mesh import Mesh
 from algorithms.topology import boundary_loops
@@ -129,3 +129,37 @@ def test_compiled_lu_matches_lapack_and_flags_singular():
     b = rng.normal(size=60)
     assert np.allclose(_lu_solve(a, b), np.linalg.solve(a, b), atol=1e-9)
     assert np.isnan(_lu_solve(np.ones((3, 3)), np.ones(3))).all()
+
+
+def _thin_ellipsoid_rbf():
+    s = cases.icosphere(3)
+    axes = np.array([1.0, 0.06, 0.5])  # a thin plate with a rounded rim (|z| = 0.5 at x = 0)
+    p = s.vertices * axes
+    n = s.vertices / axes  # the gradient of x^2/a^2 + ...: the outward normal
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    return fit_rbf(p, n, spacing=0.05, stride=3, offset=0.15)
+
+
+def test_lines_along_a_fills_normals_reach_a_rim_the_gradient_misses():
+    rbf = _thin_ellipsoid_rbf()
+    # a fill that cut across the rim: points inside the plate, 0.1 short of the rim, its normal +z
+    x = np.array([[0.0, 0.01, 0.4], [0.1, -0.01, 0.39], [-0.1, 0.005, 0.39]])
+    rim = 0.5 * np.sqrt(1 - x[:, 0] ** 2)
+    up = np.tile([0.0, 0.0, 1.0], (len(x), 1))
+    lifted = rbf.project_along(x, up, reach=0.2)
+    assert np.allclose(lifted[:, :2], x[:, :2])  # moved along the line only
+    assert np.abs(lifted[:, 2] - rim).max() < 0.01  # onto the rim (analytic: z = 0.5 sqrt(1 - x^2))
+    assert np.abs(rbf.value(lifted)).max() < 1e-6 * np.abs(rbf.value(x)).max() + 1e-9
+    newton = rbf.project(x)  # down the gradient: to the nearer wall (|y| = 0.036), 0.1 short of the rim
+    assert np.abs(newton[:, 1]).min() > 0.025 and (rim - newton[:, 2]).min() > 0.05
+    # a line that meets no zero within reach stays; reach 0 moves nothing
+    assert np.allclose(rbf.project_along(x, up, reach=0.05), x)
+    assert np.allclose(rbf.project_along(x, up, reach=0.0), x)
+
+
+def test_folded_faces_face_against_the_gradient():
+    rbf = _thin_ellipsoid_rbf()
+    s = cases.icosphere(2)
+    V = s.vertices * np.array([1.0, 0.06, 0.5])
+    assert not folded(rbf, V, s.faces).any()  # the surface itself, wound outward
+    assert folded(rbf, V, s.faces[:, ::-1]).all()  # wound inward: every face against the gradient

@@ -54,12 +54,8 @@ class RBFImplicit:
 
     def value_gradient(self, x: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(f(x) (K,), grad f(x) (K, 3)) in one pass over the centres."""
-        q = np.asarray(x, dtype=np.float64).reshape(-1, 3)
-        diff = q[:, None, :] - self.centres[None]
-        d = np.sqrt(np.einsum("qmd,qmd->qm", diff, diff))
-        wd = d * self.weights[None]  # w_i |x - c_i|
-        val = np.einsum("qm,qm->q", wd, d * d) + self.affine[0] + q @ self.affine[1:]
-        return val, 3.0 * np.einsum("qm,qmd->qd", wd, diff) + self.affine[1:]
+        q = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(-1, 3))
+        return _rbf_eval(q, self.centres, self.weights, self.affine)
 
     def project(self, x: NDArray[np.float64], *, iterations: int = 4,
                 reach: float = np.inf) -> NDArray[np.float64]:
@@ -82,6 +78,49 @@ class RBFImplicit:
         bad = ~np.isfinite(q).all(axis=1) | (np.linalg.norm(q - x0, axis=1) > reach)
         q[bad] = x0[bad]
         return q
+
+
+    def project_along(self, x: NDArray[np.float64], directions: NDArray[np.float64], *, reach: float,
+                      samples: int = 16, iterations: int = 20) -> NDArray[np.float64]:
+        """Each point moved along its line x + t d (d a unit direction, e.g. the fill's normal) to
+        the zero crossing of f nearest to t = 0 with |t| <= ``reach``: f sampled at ``samples``
+        steps each way, the first sign change bracketed and bisected ``iterations`` times. A point
+        whose line meets no zero within reach stays. Unlike the gradient steps of ``project``,
+        which from inside a thin part run to the nearer wall, this lifts a fill that cut across a
+        rim (its normals point to the missing rim) out to it."""
+        q = np.array(x, dtype=np.float64, copy=True).reshape(-1, 3)
+        d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+        d = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
+        if not len(q) or reach <= 0:
+            return q
+        h = reach / samples
+        f0 = self.value(q)
+        lo = np.zeros(len(q))  # bracket [lo, hi] of the chosen side (signed t), found step by step
+        hi = np.zeros(len(q))
+        flo = f0.copy()
+        found = f0 == 0
+        act = np.flatnonzero(~found)
+        for k in range(1, samples + 1):  # sequential: outward in steps of h, both sides, nearest first
+            if not len(act):
+                break
+            for side in (1.0, -1.0):
+                if not len(act):
+                    break
+                fk = self.value(q[act] + (side * k * h) * d[act])
+                hit = np.sign(fk) != np.sign(f0[act])
+                idx = act[hit]
+                lo[idx], hi[idx], flo[idx] = side * (k - 1) * h, side * k * h, f0[idx]
+                found[idx] = True
+                act = act[~hit]
+        idx = np.flatnonzero(found & (f0 != 0))
+        for _ in range(iterations):  # sequential: bisection
+            mid = (lo[idx] + hi[idx]) / 2
+            fm = self.value(q[idx] + mid[:, None] * d[idx])
+            same = np.sign(fm) == np.sign(flo[idx])
+            lo[idx], flo[idx], hi[idx] = np.where(same, mid, lo[idx]), np.where(same, fm, flo[idx]), \
+                np.where(same, hi[idx], mid)
+        t = np.where(found, (lo + hi) / 2, 0.0)
+        return q + t[:, None] * d
 
 
 def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacing: float,
@@ -123,6 +162,33 @@ def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacin
     if not np.all(np.isfinite(sol)):
         raise np.linalg.LinAlgError("singular RBF system")
     return RBFImplicit(c, sol[:m], sol[m:])
+
+
+@numba.njit(cache=True)
+def _rbf_eval(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.float64],
+              a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:  # pragma: no cover
+    """f(q) = sum_i w_i |q - c_i|^3 + a0 + a.q and its gradient 3 sum_i w_i |q - c_i| (q - c_i) + a,
+    compiled: a fill's lines are sampled at tens of thousands of points against hundreds of centres."""
+    val = np.empty(len(q))
+    grad = np.empty((len(q), 3))
+    for k in range(len(q)):
+        v = a[0] + a[1] * q[k, 0] + a[2] * q[k, 1] + a[3] * q[k, 2]
+        g0, g1, g2 = a[1], a[2], a[3]
+        for i in range(len(c)):
+            d0 = q[k, 0] - c[i, 0]
+            d1 = q[k, 1] - c[i, 1]
+            d2 = q[k, 2] - c[i, 2]
+            r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            wr = w[i] * r
+            v += wr * r * r
+            g0 += 3.0 * wr * d0
+            g1 += 3.0 * wr * d1
+            g2 += 3.0 * wr * d2
+        val[k] = v
+        grad[k, 0] = g0
+        grad[k, 1] = g1
+        grad[k, 2] = g2
+    return val, grad
 
 
 @numba.njit(cache=True)
@@ -176,30 +242,72 @@ def opposite_normals(normals: NDArray[np.float64], *, cos_bound: float = -0.95) 
     return bool((n @ n.T).min() < cos_bound)
 
 
+def fill_normals(v: NDArray[np.float64], faces: NDArray[np.int64], which: NDArray[np.int64], *,
+                 smooth: int = 1) -> NDArray[np.float64]:
+    """Area-weighted vertex normals of ``faces`` at the vertices ``which`` (unit), averaged ``smooth``
+    times over the faces around each vertex (a fill pulled through jittered free points has noisy
+    normals; the lines along them must still point across the missing surface)."""
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    acc = np.zeros((len(v), 3))
+    for k in range(3):
+        np.add.at(acc, f[:, k], fn)
+    for _ in range(smooth):  # sequential: each pass averages the last one's unit normals over the faces
+        unit = acc / np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-300)
+        per_face = unit[f].sum(axis=1)
+        acc = np.zeros((len(v), 3))
+        for k in range(3):
+            np.add.at(acc, f[:, k], per_face)
+    out = acc[which]
+    return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-300)
+
+
+def folded(rbf: RBFImplicit, V: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """Which ``faces`` face against the implicit's gradient at their corners (f grows outward, module
+    docstring; on the zero set the gradient is the surface normal): a fill moved onto the zero set
+    that folded over itself there."""
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    n = np.cross(V[f[:, 1]] - V[f[:, 0]], V[f[:, 2]] - V[f[:, 0]])
+    g = rbf.gradient(V[f].reshape(-1, 3))
+    g = (g / np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)).reshape(-1, 3, 3).sum(axis=1)
+    return np.einsum("ij,ij->i", n, g) <= 0
+
+
 def refine_onto(rbf: RBFImplicit, V: NDArray[np.float64], patch: NDArray[np.int64], fixed: NDArray[np.int64],
                 which: NDArray[np.int64], *, spacing: float, reach: float = np.inf, rounds: int = 2,
-                smooth: int = 3) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+                smooth: int = 3, along_normals: bool = False, normal_smoothing: int = 0
+                ) -> tuple[NDArray[np.float64], NDArray[np.int64],
+                                                                          NDArray[np.int64]]:
     """Bring a fill onto the implicit in rounds: project the fill vertices ``which``, then (each
     round) refine the ``patch`` faces at the edge length ``spacing`` (refine.py: a cap that rose
     over a hole is larger than the flat fill it came from, its faces split), project again and
     relax tangentially (fair.tangential_relax), projecting once more after it. ``fixed``: the faces
-    around the patch (never changed). Returns (vertices, patch faces, the fill vertices: ``which``
-    and the ones added)."""
+    around the patch (never changed). ``along_normals``: each vertex moves along the fill's normal
+    there (RBFImplicit.project_along: a fill that cut across a thin rim is lifted out to the rim)
+    instead of down the gradient (to the nearest wall), its normals averaged ``normal_smoothing``
+    times over the faces (fill_normals). Returns (vertices, patch faces, the fill
+    vertices: ``which`` and the ones added)."""
     from .fair import tangential_relax
     from .refine import refine
+
+    def onto(v: NDArray[np.float64], f: NDArray[np.int64], w: NDArray[np.int64]) -> NDArray[np.float64]:
+        if along_normals and np.isfinite(reach):
+            return rbf.project_along(v[w], fill_normals(v, np.vstack([fixed, f]), w, smooth=normal_smoothing),
+                                     reach=reach)
+        return rbf.project(v[w], reach=reach)
 
     v = np.array(V, dtype=np.float64, copy=True)
     f = np.asarray(patch, dtype=np.int64).reshape(-1, 3)
     w = np.asarray(which, dtype=np.int64)
-    v[w] = rbf.project(v[w], reach=reach)
+    v[w] = onto(v, f, w)
     for _ in range(rounds):  # sequential: each round refines the surface the last one projected
         r = refine(v, fixed, f, scale=np.full(len(v), spacing))
         if not r.splits:
             break
         w = np.concatenate([w, np.arange(len(v), len(r.vertices))])
         v, f = np.array(r.vertices, copy=True), r.faces
-        v[w] = rbf.project(v[w], reach=reach)
+        v[w] = onto(v, f, w)
         if smooth:
             v = tangential_relax(v, np.vstack([fixed, f]), w, iterations=smooth)
-            v[w] = rbf.project(v[w], reach=reach)
+            v[w] = onto(v, f, w)
     return v, f, w
