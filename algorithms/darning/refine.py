@@ -89,7 +89,7 @@ def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: 
 def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch: NDArray[np.int64], *,
            density: float = np.sqrt(2.0), scale: NDArray[np.float64] | None = None, max_rounds: int = 60,
            flip: bool = True, label: NDArray[np.int64] | None = None,
-           obtuse: float | None = 150.0, budget: float = 6.0, lens: float | None = 120.0) -> Refined:
+           obtuse: float | None = 150.0, budget: float = 6.0, lens: float | None = None) -> Refined:
     """Refine the patch faces ``patch`` (indices into ``vertices``) next to ``fixed_faces``.
 
     density: alpha of the split test (1 = the spec's test literally; sqrt 2 = Liepa's).
@@ -109,7 +109,11 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
         on that edge has angles below 30 degrees at the edge's ends) is not inserted; the face stays
         whole (a long border edge beside short ones: the centroid of its face lies a third of the
         face's height from it, so each split brought a vertex closer and the last triangle on the
-        edge had 1-4 degree angles). None: the spec's test alone.
+        edge had 1-4 degree angles), and only for border edges longer than ``density`` times their
+        ends' scale. None (default): the spec's test alone. Measured with 120 in the repair: every
+        border edge guarded, featuretype-hole unforced angles below 20 deg 20.7 -> 20.0 % but
+        bunny-many-holes min angle 18.6 -> 4.1 deg; long edges only, no gain on featuretype and
+        bunny-many-holes Hausdorff 0.76 -> 0.87 % of the diagonal (faces left whole): not the default.
     """
     if not density > 0:
         raise ValueError(f"density must be > 0, got {density}")
@@ -142,7 +146,7 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
         dist = density * np.linalg.norm(vc[:, None, :] - t, axis=2)
         split = np.all(dist > lc[:, None], axis=1) & np.all(dist > lv[f], axis=1)
         if lens is not None and split.any():
-            split[split] = ~_encroached(P, _stuck_edges(f, len(P), fixed_faces), vc[split], lens=lens)
+            split[split] = ~_encroached(P, _stuck_edges(P, f, fixed_faces, lv, density), vc[split], lens=lens)
         if len(f) + 2 * int(split.sum()) > max_faces:
             split[:] = False
         ns = int(split.sum())
@@ -168,7 +172,8 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
             obtuse_rounds += 1
             P = np.vstack(pts) if len(pts) > 1 else pts[0]
             f, lab, mids, lm = _split_obtuse(P, f, lab, lv, nv, np.radians(obtuse),
-                                             _stuck_edges(f, len(P), fixed_faces) if lens is not None else None,
+                                             _stuck_edges(P, f, fixed_faces, lv, density)
+                                             if lens is not None else None,
                                              lens or 180.0)
             if not len(mids):
                 break
@@ -180,11 +185,17 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
     return Refined(P, f, lab, splits, flips, rounds)
 
 
-def _stuck_edges(f: NDArray[np.int64], nv: int, fixed: NDArray[np.int64]) -> NDArray[np.int64]:
-    """(S, 2) the patch edges that can neither split nor flip: edges of the fixed faces (the hole
-    border) and edges with one patch face."""
-    stuck = unchangeable(f, nv, np.asarray(fixed, dtype=np.int64).reshape(-1, 3), None)
-    return np.stack([f[stuck], np.roll(f, -1, axis=1)[stuck]], axis=1)
+def _stuck_edges(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64], lv: NDArray[np.float64],
+                 density: float) -> NDArray[np.int64]:
+    """(S, 2) the long patch edges that can neither split nor flip: edges of the fixed faces (the hole
+    border) and edges with one patch face, longer than ``density`` times their ends' mean scale l
+    (an edge at the scale is not guarded: the centroid of an equilateral face on it lies on its lens,
+    and the spec's splits along an even border would stop: bunny-many-holes min angle 18.6 -> 4.1 deg
+    with every border edge guarded)."""
+    stuck = unchangeable(f, len(p), np.asarray(fixed, dtype=np.int64).reshape(-1, 3), None)
+    a, b = f[stuck], np.roll(f, -1, axis=1)[stuck]
+    long_ = np.linalg.norm(p[a] - p[b], axis=1) > density * (lv[a] + lv[b]) / 2
+    return np.stack([a[long_], b[long_]], axis=1)
 
 
 def _split_obtuse(p: NDArray[np.float64], f: NDArray[np.int64], lab: NDArray[np.int64], lv: NDArray[np.float64],
