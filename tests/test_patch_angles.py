@@ -113,3 +113,64 @@ def test_free_vertex_on_a_border_edge_is_moved_or_removed():
     q2 = refine_angles(v, patch, ring)
     assert q2.inserted == 0 and q2.bad.sum() == 1 and not q2.forced.any()
     np.testing.assert_array_equal(q2.faces, patch)
+
+
+def _half_disc(n: int = 24):
+    """A bare half-disc loop: n short arc edges (0.13) and the diameter (2.0) closing it."""
+    t = np.linspace(0, np.pi, n + 1)
+    return np.stack([np.cos(t), np.sin(t), np.zeros(n + 1)], 1), np.arange(n + 1)
+
+
+def _view(v, a, b, x):
+    """Angle (degrees) at which each point x sees the segment (v[a], v[b])."""
+    u, w = v[a] - x, v[b] - x
+    return np.degrees(np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w)))
+
+
+def test_refinement_respects_the_lens_of_a_long_border_edge():
+    # Ruppert's encroachment rule in the darning's refinement: no centroid / midpoint inside the
+    # diametral lens (120 deg) of the diameter, which may not split; without it a vertex lands on it
+    import sys
+
+    refine = sys.modules["algorithms.darning.refine"].refine
+    v, lp = _half_disc()
+    none = np.zeros((0, 3), dtype=np.int64)
+    faces = lp[triangulate(v)]
+    loose = refine(v, none, faces)  # the default: the spec's splits alone
+    assert _view(v, 0, len(lp) - 1, loose.vertices[len(v):]).max() > 170.0  # the rule is what keeps them out
+    kept = refine(v, none, faces, lens=120.0)
+    assert kept.splits >= 1
+    assert _view(v, 0, len(lp) - 1, kept.vertices[len(v):]).max() <= 120.0
+
+
+def test_half_disc_patch_angles_after_angle_refinement():
+    # the repair's path: darn, then refine_angles with the new vertices movable; the encroachment
+    # test of refine_angles must see the long diameter (it looked at the 8 nearest edge midpoints
+    # only and let off-centres land on the diameter: min 0.3 / 0.5 deg)
+    from algorithms.darning import darn
+
+    v, lp = _half_disc()
+    none = np.zeros((0, 3), dtype=np.int64)
+    for method, bound in (("liepa-refine", 15.0), ("liepa-fair", 14.0)):
+        p = darn(v, none, lp, method=method)
+        vv = np.vstack([v, p.new_vertices])
+        q = refine_angles(vv, p.faces, none, movable=np.arange(len(v), len(vv)))
+        ang = triangle_angles(q.vertices, q.faces)
+        assert not q.forced.any()  # no border corner below 20 deg: every angle counts
+        assert ang.min() >= bound
+        assert (ang < 20.0).mean() < 0.05
+
+
+def test_encroached_finds_a_long_segment_among_short_ones():
+    # brute force: every (point, segment) pair; the long segment's midpoint is far from the points
+    from algorithms.darning.refine import _encroached
+
+    rng = np.random.default_rng(3)
+    v, lp = _half_disc()
+    seg = np.stack([lp, np.roll(lp, -1)], 1)
+    x = np.c_[rng.uniform(-1, 1, 400), rng.uniform(0, 1, 400), np.zeros(400)]
+    brute = np.zeros(len(x), dtype=bool)
+    for a, b in seg:
+        brute |= _view(v, a, b, x) > 120.0
+    assert brute.sum() > 50
+    assert np.array_equal(_encroached(v, seg, x), brute)
