@@ -8,12 +8,28 @@ import pytest
 
 from algorithms.cases import cap, cut, icosphere
 from algorithms.darning import refine, triangulate
-from algorithms.darning.refine import _tri_angles, _unchangeable
-from algorithms.darning.refine_kernels import corner_angles, smooth_bad, unchangeable
-from algorithms.topology import boundary_loops
+from algorithms.darning.refine import _tri_angles
+from algorithms.darning.refine_kernels import corner_angles, smooth_bad, stars, unchangeable
+from algorithms.topology import boundary_loops, halfedges
 
 
-# the numpy loop the compiled kernel replaced, kept here as its reference
+# the numpy versions the compiled kernels replaced, kept here as their references
+def _unchangeable(f, nv, fixed, locked):
+    """(M, 3) whether edge k of each patch face (f[:, k] -> f[:, k+1]) can neither split nor flip: a
+    hole border edge (an edge of a fixed face), a locked edge, or an edge with one patch face."""
+    keys = []
+    if len(fixed):
+        keys.append(np.sort(halfedges(fixed), axis=1) @ np.array([nv, 1]))
+    if locked is not None:
+        keys.append(np.sort(locked, axis=1) @ np.array([nv, 1]))
+    a, b = f, np.roll(f, -1, axis=1)
+    out = np.isin(np.minimum(a, b) * nv + np.maximum(a, b), np.unique(np.concatenate(keys))) if keys \
+        else np.zeros(f.shape, dtype=bool)
+    he = np.sort(halfedges(f), axis=1) @ np.array([nv, 1])
+    _, inv, cnt = np.unique(he, return_inverse=True, return_counts=True)
+    return out | (cnt[inv] < 2).reshape(-1, 3)
+
+
 def _smooth_bad(p, f, free, bad, *, tries=3, gain=0.1 * np.pi / 180):
     """Move the free vertices of the bad faces, in place, to raise the smallest angle of their faces
     (smart Laplacian smoothing, in the vertex's tangent plane): candidates are the umbrella step
@@ -23,14 +39,9 @@ def _smooth_bad(p, f, free, bad, *, tries=3, gain=0.1 * np.pi / 180):
     smallest angle by more than ``gain`` (radians) without folding a face is kept. A free vertex near
     a fixed edge, where no point may be inserted (the encroachment rule of :func:`_insert`), can
     only be moved. Returns the number of moves kept."""
-    cand = np.unique(f[bad])
-    cand = cand[free[cand]]
+    cand, order, start, stop = stars(f, free, bad)
     if not len(cand):
         return 0
-    order = np.argsort(f.ravel(), kind="stable")
-    flat = f.ravel()[order]
-    start = np.searchsorted(flat, cand)
-    stop = np.searchsorted(flat, cand, side="right")
     kept = 0
     steps = np.array([1.0, 0.5, 0.25])
     for _ in range(tries):  # sequential: each vertex moves against its neighbours' current positions

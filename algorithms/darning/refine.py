@@ -267,13 +267,6 @@ def corner_angles(p: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.fl
     return _corner_angles(p, f)
 
 
-def _fixed_edge_mask(f: NDArray[np.int64], nv: int, keys: NDArray[np.int64]) -> NDArray[np.bool_]:
-    """(M, 3) whether edge k of face i, (f[i, k], f[i, k+1]), has its key (min * nv + max) in ``keys``."""
-    a, b = f, np.roll(f, -1, axis=1)
-    k = np.minimum(a, b) * nv + np.maximum(a, b)
-    return np.isin(k, keys)
-
-
 def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: NDArray[np.int64], *,
                   min_angle: float = 20.0, margin: float = 2.0, locked: NDArray[np.int64] | None = None,
                   movable: NDArray[np.int64] | None = None, max_rounds: int = 40, budget: float = 3.0,
@@ -429,21 +422,6 @@ def _encroached(p: NDArray[np.float64], seg: NDArray[np.int64], x: NDArray[np.fl
     ang = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
     out[xi[ang > np.radians(lens)]] = True
     return out
-
-
-def _unchangeable(f: NDArray[np.int64], nv: int, fixed: NDArray[np.int64],
-                  locked: NDArray[np.int64] | None) -> NDArray[np.bool_]:
-    """(M, 3) whether edge k of each patch face (f[:, k] -> f[:, k+1]) can neither split nor flip: a
-    hole border edge (an edge of a fixed face), a locked edge, or an edge with one patch face."""
-    keys = []
-    if len(fixed):
-        keys.append(np.sort(halfedges(fixed), axis=1) @ np.array([nv, 1]))
-    if locked is not None:
-        keys.append(np.sort(locked, axis=1) @ np.array([nv, 1]))
-    out = _fixed_edge_mask(f, nv, np.unique(np.concatenate(keys))) if keys else np.zeros(f.shape, dtype=bool)
-    he = np.sort(halfedges(f), axis=1) @ np.array([nv, 1])
-    _, inv, cnt = np.unique(he, return_inverse=True, return_counts=True)
-    return out | (cnt[inv] < 2).reshape(-1, 3)
 
 
 def _bad_triangles(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
@@ -646,8 +624,6 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
             # share a third one): move c to where its star's smallest angle is largest
             if _move_best(p, star, int(c), before):
                 done += 1
-            continue
-        if best is None:
             continue
         _, both, nf = best
         f = f.copy()

@@ -5,7 +5,8 @@ whose every step reads the positions the previous step wrote (smart Laplacian sm
 vertex against its neighbours' current positions); in numpy each step is a dozen small array calls
 (~200 us of call overhead around ~2 us of arithmetic). Here the same steps run in one numba loop.
 The arithmetic is refine.py's, in the same order; tests/test_refine_kernels.py compares each
-kernel with the numpy function it replaces (kept in refine.py as the reference).
+kernel with the numpy function it replaces (kept in the test as its reference; corner angles against
+refine._angle_at, which refine.py still uses).
 """
 
 from __future__ import annotations
@@ -154,15 +155,21 @@ def smooth_bad(p: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.bo
     candidates, stars, trial points and acceptance rule;
     moves the free vertices of the bad faces in place and returns the number of moves kept."""
     f = np.ascontiguousarray(f, dtype=np.int64)
-    cand = np.unique(f[bad])
-    cand = cand[free[cand]]
+    cand, order, start, stop = stars(f, free, bad)
     if not len(cand):
         return 0
+    return int(_smooth_rounds(p, f, cand, order, start, stop, int(tries), float(gain)))
+
+
+def stars(f: NDArray[np.int64], free: NDArray[np.bool_], bad: NDArray[np.int64]
+          ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """The free vertices of the bad faces and their stars: (cand, order, start, stop), the faces
+    around cand[i] being f[order[start[i]:stop[i]] // 3]."""
+    cand = np.unique(f[bad])
+    cand = cand[free[cand]]
     order = np.argsort(f.ravel(), kind="stable")
     flat = f.ravel()[order]
-    start = np.searchsorted(flat, cand)
-    stop = np.searchsorted(flat, cand, side="right")
-    return int(_smooth_rounds(p, f, cand, order, start, stop, int(tries), float(gain)))
+    return cand, order, np.searchsorted(flat, cand), np.searchsorted(flat, cand, side="right")
 
 
 @numba.njit(cache=True)
@@ -206,8 +213,9 @@ def _unchangeable_kernel(f: np.ndarray, nv: int, fixed: np.ndarray, locked: np.n
 
 def unchangeable(f: NDArray[np.int64], nv: int, fixed: NDArray[np.int64],
                  locked: NDArray[np.int64] | None) -> NDArray[np.bool_]:
-    """refine._unchangeable compiled: (M, 3) whether edge k of each patch face (f[:, k] -> f[:, k+1])
-    is a hole border edge (an edge of a fixed face), a locked edge, or an edge with one patch face."""
+    """(M, 3) whether edge k of each patch face (f[:, k] -> f[:, k+1]) can neither split nor flip: a
+    hole border edge (an edge of a fixed face), a locked edge, or an edge with one patch face.
+    Compiled; its numpy reference is in tests/test_refine_kernels.py."""
     f = np.ascontiguousarray(f, dtype=np.int64).reshape(-1, 3)
     fx = np.ascontiguousarray(fixed, dtype=np.int64).reshape(-1, 3)
     lk = np.zeros((0, 2), dtype=np.int64) if locked is None else np.ascontiguousarray(locked, dtype=np.int64)
