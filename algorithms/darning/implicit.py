@@ -244,22 +244,22 @@ def opposite_normals(normals: NDArray[np.float64], *, cos_bound: float = -0.95) 
 
 def fill_normals(v: NDArray[np.float64], faces: NDArray[np.int64], which: NDArray[np.int64], *,
                  smooth: int = 1) -> NDArray[np.float64]:
-    """Area-weighted vertex normals of ``faces`` at the vertices ``which`` (unit), averaged ``smooth``
-    times over the faces around each vertex (a fill pulled through jittered free points has noisy
-    normals; the lines along them must still point across the missing surface)."""
+    """Area-weighted vertex normals of ``faces`` (boundary.vertex_normals) at the vertices ``which``
+    (unit), averaged ``smooth`` times over the faces around each vertex (a fill pulled through
+    jittered free points has noisy normals; the lines along them must still point across the
+    missing surface)."""
+    from ..boundary import vertex_normals
+    from ..mesh import Mesh
+
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-    acc = np.zeros((len(v), 3))
-    for k in range(3):
-        np.add.at(acc, f[:, k], fn)
+    unit = vertex_normals(Mesh(v, f))
     for _ in range(smooth):  # sequential: each pass averages the last one's unit normals over the faces
-        unit = acc / np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-300)
         per_face = unit[f].sum(axis=1)
         acc = np.zeros((len(v), 3))
         for k in range(3):
             np.add.at(acc, f[:, k], per_face)
-    out = acc[which]
-    return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-300)
+        unit = acc / np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-300)
+    return unit[which]
 
 
 def folded(rbf: RBFImplicit, V: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.bool_]:
@@ -276,8 +276,7 @@ def folded(rbf: RBFImplicit, V: NDArray[np.float64], faces: NDArray[np.int64]) -
 def refine_onto(rbf: RBFImplicit, V: NDArray[np.float64], patch: NDArray[np.int64], fixed: NDArray[np.int64],
                 which: NDArray[np.int64], *, spacing: float, reach: float = np.inf, rounds: int = 2,
                 smooth: int = 3, along_normals: bool = False, normal_smoothing: int = 0
-                ) -> tuple[NDArray[np.float64], NDArray[np.int64],
-                                                                          NDArray[np.int64]]:
+                ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """Bring a fill onto the implicit in rounds: project the fill vertices ``which``, then (each
     round) refine the ``patch`` faces at the edge length ``spacing`` (refine.py: a cap that rose
     over a hole is larger than the flat fill it came from, its faces split), project again and
