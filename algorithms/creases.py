@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .bridge_graph import resample_chain
-from .topology import face_adjacency
+from .topology import edge_table, face_adjacency
 
 
 @dataclass(frozen=True, eq=False)
@@ -203,11 +203,9 @@ def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: 
         return c
 
     # only vertices on the surface's border can be crease ends (a hole interrupts the crease there)
-    f = np.asarray(faces, dtype=np.int64)
-    e_all = np.sort(np.vstack([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-    ue, cnt = np.unique(e_all, axis=0, return_counts=True)
+    et = edge_table(np.asarray(faces, dtype=np.int64))
     border = np.zeros(len(vertices) + 1, dtype=bool)
-    border[ue[cnt == 1].ravel()] = True
+    border[et.edges[et.counts == 1].ravel()] = True
     for v in {int(x) for x in edges.ravel() if border[x]}:
         fvn_v = fvn[start[v]:start[v + 1]]
         keep: list[NDArray[np.float64]] = []
