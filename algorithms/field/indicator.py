@@ -33,6 +33,13 @@ from .shielding import Bvh, segment_blocked_hint
 
 Arr = NDArray[np.float64]
 PRUNE_GAUSS = 4.0  # exp(-16) ~ 1e-7: relative weight below which a Gaussian source is skipped
+
+
+def prune_bound2(lc: Any, kernel: int) -> NDArray[np.float64]:
+    """The kernels' squared pruning distance for L_c (a scalar or one per point): (PRUNE_GAUSS L_c)^2
+    for the Gaussian kernel (0), 1e300 (never prune) for the heavy-tailed one."""
+    lc = np.asarray(lc, dtype=np.float64)
+    return np.minimum((PRUNE_GAUSS * lc) ** 2, 1e300) if kernel == 0 else np.full(lc.shape, 1e300)
 NO_GROUP = -2  # a point that excludes no group of sources
 SERIAL_BELOW = 16  # fewer points than this: one thread (a tracing step)
 CHORD_SLACK = 1.25  # coherence across points only for a point near the chord of its key points
@@ -680,7 +687,7 @@ class IndicatorField:
         # the heavy-tailed kernel is never pruned.
         self.prune = PRUNE_GAUSS * self.lc if self.kernel == 0 else np.inf
         self.shrink = 1.0 / (1.0 + gmax)
-        self._prune2 = min(self.prune * self.prune, 1e300) if np.isfinite(self.prune) else 1e300
+        self._prune2 = float(prune_bound2(self.lc, self.kernel))
         self._one: tuple | None = None  # full mode, one point: the kernel's arguments, made once
 
     def _full_args(self) -> tuple:
@@ -758,19 +765,11 @@ class IndicatorField:
         near = np.full(n, -1, dtype=np.int64)
         dist = np.full(n, np.inf)
         pairs = 0
-        lc2 = self.lc * self.lc
-        prune2 = self.prune * self.prune if np.isfinite(self.prune) else np.inf
-        prune2 = min(prune2, 1e300)
         if not self.full:  # the light kernels read L_c^2 and the pruning bound per point
-            if x_lc is None:
-                lc2_pt, prune2_pt = np.full(n, lc2), np.full(n, prune2)
-            else:
-                lc_pt = np.ascontiguousarray(x_lc, dtype=np.float64).reshape(n)
-                if not np.all(lc_pt > 0):
-                    raise ValueError("x_lc: L_c must be positive")
-                lc2_pt = lc_pt * lc_pt
-                prune2_pt = (np.minimum((PRUNE_GAUSS * lc_pt) ** 2, 1e300) if self.kernel == 0
-                             else np.full(n, 1e300))
+            lc_pt = np.full(n, self.lc) if x_lc is None else np.ascontiguousarray(x_lc, dtype=np.float64).reshape(n)
+            if not np.all(lc_pt > 0):
+                raise ValueError("x_lc: L_c must be positive")
+            lc2_pt, prune2_pt = lc_pt * lc_pt, prune_bound2(lc_pt, self.kernel)
         p = self.params
         if n == 0 or len(S) == 0:
             return Evaluation(H.reshape(n, 3, 3), near, dist, 0)
