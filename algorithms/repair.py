@@ -228,7 +228,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
            cancel: Callable[[], bool] | None = None) -> RepairResult:
     """Repair an incomplete model into a closed surface (when its islands bound one)."""
     from . import repair_field as rf
-    from .darning import darn
+    from .darning import darn, merge_copies
 
     t_all = time.perf_counter()
     timings: dict[str, float] = {}
@@ -541,6 +541,15 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                      method=params.darning, weight=params.weight, apart=sub_f[apart])
         ids = work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
         to_global = np.concatenate([glob, ids])
+        if len(patch.merged):  # a pinched hole: the copies of a split vertex on its border are one vertex again
+            pairs = to_global[patch.merged]
+            work.faces = [merge_copies(f, pairs) for f in work.faces]
+            incidence = _Incidence(work.F(), work.n)
+            alias = {int(c): int(k) for c, k in pairs}
+            final[k + 1:] = [tuple(alias.get(x, x) for x in p) for p in final[k + 1:]]
+            pinned = [merge_copies(a, pairs) for a in pinned]
+            locked = [merge_copies(a, pairs) for a in locked]
+            on_crease[pairs[:, 1]] |= on_crease[pairs[:, 0]]
         work.faces.append(to_global[np.asarray(patch.faces, dtype=np.int64)])
         incidence.added.append(work.faces[-1])
         patch_ids.append(ids)

@@ -24,6 +24,13 @@ algebraic point set surface of the input, where the fairing spans a thin part fl
 rises onto it in refine -> project rounds) and ``samples.py`` (free points as samples of the
 missing surface: PRAF normals for the APSS, and the fill faired through the samples it missed).
 
+Pinched loops: a loop that passes twice through one point (a non-manifold vertex that
+normalisation split into copies, each copy on the loop once) is two holes joined at that point.
+``darn`` fills each part on its own with the copies taken as one vertex, and the patch records the
+copies it joined (``Patch.merged``): the filled surface is manifold there only with them merged,
+so :func:`apply_patch` renumbers the copies to the vertex they were split from (same position:
+every face keeps its vertex coordinates).
+
 Orientation: a loop is given in its positive direction (the surrounding surface has a face with
 half-edge a -> b for every loop edge a -> b, as :func:`algorithms.topology.boundary_loops`
 returns it); every patch face holds b -> a, so the filled mesh is consistently oriented.
@@ -32,10 +39,13 @@ Input faces are never changed; new vertices are appended after the input's.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from ..mesh import Mesh, _frozen
 from ..topology import boundary_halfedges, boundary_loops, halfedges
@@ -49,7 +59,7 @@ DEFAULT_METHOD = "liepa-fair"
 FAIRINGS = ("U2", "U1", "U3")
 
 __all__ = ["METHODS", "DEFAULT_METHOD", "WEIGHTS", "FAIRINGS", "Patch", "darn", "fill_holes", "apply_patch",
-           "triangulate", "fan", "refine", "relax", "fair"]
+           "merge_copies", "pinches", "split_pinched", "triangulate", "fan", "refine", "relax", "fair"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +71,8 @@ class Patch:
     faces: (M, 3) indices into the combined vertex array (input vertices then new_vertices).
     loop: (L,) the hole's loop as given. method, weight: how it was made.
     splits, flips: refinement counts (0 without refinement).
+    merged: (P, 2) pairs (copy, kept) of coincident loop vertices the patch joined (module
+        docstring, "Pinched loops"): faces must use ``kept`` for ``copy`` (:func:`apply_patch`).
     """
 
     new_vertices: NDArray[np.float64]
@@ -70,8 +82,10 @@ class Patch:
     weight: str
     splits: int = 0
     flips: int = 0
+    merged: NDArray[np.int64] = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "merged", _frozen(np.reshape(self.merged, (-1, 2)), np.int64))
         object.__setattr__(self, "new_vertices", _frozen(np.reshape(self.new_vertices, (-1, 3)), np.float64))
         object.__setattr__(self, "faces", _frozen(np.reshape(self.faces, (-1, 3)), np.int64))
         object.__setattr__(self, "loop", _frozen(self.loop, np.int64))
@@ -79,9 +93,69 @@ class Patch:
 
 def apply_patch(vertices: NDArray[np.float64], faces: NDArray[np.int64],
                 patch: Patch) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """(vertices + patch.new_vertices, faces + patch.faces)."""
-    return (np.vstack([np.asarray(vertices, dtype=np.float64), patch.new_vertices]),
-            np.vstack([np.asarray(faces, dtype=np.int64).reshape(-1, 3), patch.faces]))
+    """(vertices + patch.new_vertices, faces + patch.faces), the copies the patch joined renumbered
+    to the vertex kept (``Patch.merged``)."""
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if len(patch.merged):
+        f = merge_copies(f, patch.merged)
+    return (np.vstack([np.asarray(vertices, dtype=np.float64), patch.new_vertices]), np.vstack([f, patch.faces]))
+
+
+def merge_copies(faces: NDArray[np.int64], pairs: NDArray[np.int64]) -> NDArray[np.int64]:
+    """``faces`` with every (copy, kept) pair's copy renumbered to kept (a new array)."""
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    f = np.asarray(faces, dtype=np.int64)
+    if not len(pairs) or not f.size:
+        return f.copy()
+    to = np.arange(max(int(f.max()), int(pairs.max())) + 1)
+    to[pairs[:, 0]] = pairs[:, 1]
+    return to[f]
+
+
+def pinches(vertices: NDArray[np.float64], loop: NDArray[np.int64]) -> NDArray[np.int64]:
+    """(P, 2) pairs (copy, kept) of distinct loop vertices at one point (within 1e-12 of the loop's
+    extent); kept is the smallest index at that point (the input's vertex, copies come after it)."""
+    lp = np.asarray(loop, dtype=np.int64)
+    pts = np.asarray(vertices, dtype=np.float64)[lp]
+    tol = 1e-12 * float(np.ptp(pts, axis=0).max(initial=0.0))
+    close = cKDTree(pts).query_pairs(tol, output_type="ndarray") if len(pts) > 1 else np.zeros((0, 2), np.int64)
+    close = close[lp[close[:, 0]] != lp[close[:, 1]]]
+    if not len(close):
+        return np.zeros((0, 2), dtype=np.int64)
+    n = len(lp)
+    _, label = connected_components(coo_matrix((np.ones(len(close)), (close[:, 0], close[:, 1])), shape=(n, n)),
+                                    directed=False)
+    kept = np.full(n, np.iinfo(np.int64).max)
+    np.minimum.at(kept, label, lp)
+    pairs = np.unique(np.stack([lp, kept[label]], axis=1), axis=0)
+    return pairs[pairs[:, 0] != pairs[:, 1]]
+
+
+def split_pinched(loop: NDArray[np.int64], pairs: NDArray[np.int64]) -> list[NDArray[np.int64]]:
+    """The simple loops of a pinched loop (copies renumbered to the vertex kept), innermost first.
+
+    The closest repeat of a vertex, positions i < j of the loop, bounds a part without repeats:
+    loop[i:j] is cut off (its closing edge runs to the copy at j) and the rest goes on through i.
+    Parts of fewer than 3 vertices need no face: their two edges are one edge once the copies are
+    merged (a slit closes).
+    """
+    to = {int(c): int(k) for c, k in np.asarray(pairs, dtype=np.int64).reshape(-1, 2)}
+    rest = [to.get(int(x), int(x)) for x in loop]
+    parts: list[NDArray[np.int64]] = []
+    while True:
+        last: dict[int, int] = {}
+        best: tuple[int, int] | None = None
+        for j, x in enumerate(rest):
+            if x in last and (best is None or j - last[x] < best[1] - best[0]):
+                best = (last[x], j)
+            last[x] = j
+        if best is None:
+            break
+        i, j = best
+        parts.append(np.asarray(rest[i:j], dtype=np.int64))
+        rest = rest[:i] + rest[j:]
+    parts.append(np.asarray(rest, dtype=np.int64))
+    return [p for p in parts if len(p) >= 3]
 
 
 def _check(method: str, weight: str, fairing: str, fair_weights: str) -> None:
@@ -134,6 +208,11 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     if lp.min() < 0 or lp.max() >= len(v):
         raise ValueError("loop vertex index out of range")
     nv = len(v)
+    pairs = pinches(v, lp)
+    if len(pairs):  # a pinched loop: its simple parts one after another, the copies joined
+        return _darn_parts(v, f, lp, pairs, apart, dict(
+            method=method, weight=weight, density=density, fairing=fairing, fair_weights=fair_weights,
+            fair_rounds=fair_rounds, smooth=smooth, fair_iterations=fair_iterations, forbid_existing=forbid_existing))
     ring = f[np.isin(f, lp).any(axis=1)]  # the fixed faces touching the hole border
     if apart is not None and len(apart):
         ap = np.asarray(apart, dtype=np.int64).reshape(-1, 3)
@@ -156,14 +235,6 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
             a, b = pos[he[both, 0]], pos[he[both, 1]]
             forbidden[a, b] = True
             forbidden[b, a] = True
-    # copies of one point on the loop (a non-manifold vertex that normalisation split) must not be
-    # joined: a chord between them has length 0 and every triangle on it has area 0, which the
-    # area weight would prefer
-    d = v[lp][:, None, :] - v[lp][None, :, :]
-    same = np.einsum("ijk,ijk->ij", d, d) <= (1e-12 * float(np.ptp(v[lp], axis=0).max(initial=0.0))) ** 2
-    np.fill_diagonal(same, False)
-    if same.any():
-        forbidden = same if forbidden is None else forbidden | same
     normals = None
     if weight == "dihedral":
         normals = _outside_normals(v, ring, lp)
@@ -213,6 +284,22 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
                 pf, nflip = relax(P, pf, every)
                 flips += nflip
     return Patch(P[nv:], pf, lp, method, weight, splits, flips)
+
+
+def _darn_parts(v: NDArray[np.float64], f: NDArray[np.int64], lp: NDArray[np.int64], pairs: NDArray[np.int64],
+                apart: NDArray[np.int64] | None, options: dict) -> Patch:
+    """darn() of a pinched loop: each simple part (split_pinched) filled on the surface the parts
+    before it completed, the copies renumbered; one Patch for all."""
+    nv = len(v)
+    cur_v, cur_f = v, merge_copies(f, pairs)
+    ap = merge_copies(apart, pairs) if apart is not None and len(apart) else apart
+    splits = flips = 0
+    for part in split_pinched(lp, pairs):  # sequential: each part is filled beside the previous ones
+        p = darn(cur_v, cur_f, part, apart=ap, **options)
+        cur_v, cur_f = apply_patch(cur_v, cur_f, p)
+        splits += p.splits
+        flips += p.flips
+    return Patch(cur_v[nv:], cur_f[len(f):], lp, options["method"], options["weight"], splits, flips, pairs)
 
 
 def plausible(points: NDArray[np.float64], border: NDArray[np.float64], *, reach: float = 1.0) -> bool:
