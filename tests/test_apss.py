@@ -75,3 +75,45 @@ def test_bunny_ear_rim_bite_follows_the_rim():
         h[fit] = distances(res.mesh.vertices, res.mesh.faces, truth.vertices, truth.faces, samples=20000).hausdorff
     assert h["none"] > 0.015
     assert h["apss"] < 0.75 * h["none"] and h["apss"] < 0.0125
+
+
+def _height_field(f, n=1500, seed=3, hole=0.35):
+    """Points (with unit normals) of z = f(x, y) over [-1, 1]^2, a disk of radius ``hole`` missing."""
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(-1, 1, (n, 2))
+    xy = xy[np.linalg.norm(xy, axis=1) > hole]
+    eps = 1e-6
+    z = f(xy[:, 0], xy[:, 1])
+    fx = (f(xy[:, 0] + eps, xy[:, 1]) - f(xy[:, 0] - eps, xy[:, 1])) / (2 * eps)
+    fy = (f(xy[:, 0], xy[:, 1] + eps) - f(xy[:, 0], xy[:, 1] - eps)) / (2 * eps)
+    nrm = np.c_[-fx, -fy, np.ones(len(xy))]
+    return np.c_[xy, z], nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
+
+
+@pytest.mark.parametrize("f, expected", [
+    (lambda x, y: 0.3 * (x * x - y * y), 1.0),  # a symmetric saddle
+    (lambda x, y: 0.3 * (x * x - 0.5 * y * y), 0.5),  # k2 = -k1 / 2
+    (lambda x, y: 0.3 * (x * x + y * y), 0.0),  # a cap
+    (lambda x, y: 0.3 * x * x, 0.0),  # a cylinder
+])
+def test_saddle_measure_of_quadrics(f, expected):
+    from algorithms.darning.apss import saddle_measure
+
+    p, n = _height_field(f)
+    x = np.zeros((1, 3))
+    s = saddle_measure(x, p[None], n[None], np.ones((1, len(p))))
+    assert s[0] == pytest.approx(expected, abs=0.02)  # the mean normal tilts a little off z: not exact
+
+
+def test_a_saddle_hole_keeps_the_fill():
+    """Over a hole in a saddle z = 0.3 (x^2 - y^2) no sphere fits: the faired fill (here the exact
+    surface lifted 0.1 off it) would be moved towards a fitted sphere; the saddle test keeps it."""
+    f = lambda x, y: 0.3 * (x * x - y * y)  # noqa: E731
+    p, n = _height_field(f)
+    rng = np.random.default_rng(4)
+    a, r = rng.uniform(0, 2 * np.pi, 30), rng.uniform(0.0, 0.25, 30)
+    q = np.c_[r * np.cos(a), r * np.sin(a), f(r * np.cos(a), r * np.sin(a)) + 0.1]
+    moved = project(q, p, n, spacing=0.1, saddle=None)
+    kept = project(q, p, n, spacing=0.1)
+    assert np.abs(moved - q).max() > 0.05  # without the test the sphere pulls them
+    assert np.array_equal(kept, q)

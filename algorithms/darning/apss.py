@@ -32,7 +32,14 @@ bunny's 6-7 % body holes it bulged out by 1.5-2.5 % of the diagonal), t_gap = 0 
 point is within disagree[0] l of the sphere and 1 beyond disagree[1] l (a sphere only
 approximates a tube or a saddle: where the fairing already agrees within a fraction of an edge,
 it is kept; measured on the torus cases, where projecting everything doubled the Hausdorff
-distance); linear in between, so the moved points stay a continuous surface.
+distance); linear in between, so the moved points stay a continuous surface. And t_saddle: a
+sphere cannot follow a saddle (a neck, where an ear meets the head): the data read at x are fitted
+by a quadric height field z = a x^2 + b xy + c y^2 + d x + e y + f over the plane of their mean
+normal; with principal curvatures k1 k2 < 0 the saddle measure is -k1 k2 / max(k1^2, k2^2) (1: a
+symmetric saddle, 0: a cap or a cylinder), t_saddle = 1 below saddle[0] and 0 above saddle[1].
+Measured: the points the projection helps (a bunny ear cut across) read <= 0.3; on a slab cut
+across the bunny's ear-head junction the sphere dented the faired fill by 0.7 % of the diagonal,
+its points reading 0.5-0.9 (light-mode Hausdorff 0.75 -> 0.26 % with the test).
 """
 
 from __future__ import annotations
@@ -88,14 +95,37 @@ def project_to_spheres(u0: NDArray[np.float64], u: NDArray[np.float64], u4: NDAr
     return out
 
 
+def saddle_measure(x: NDArray[np.float64], p: NDArray[np.float64], n: NDArray[np.float64],
+                   w: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(K,) how saddle-shaped the data read at each point are (module docstring): -k1 k2 / max(k1^2,
+    k2^2) where the principal curvatures of the weighted quadric height-field fit have opposite
+    signs, else 0. p, n: (K, k, 3) data points and unit normals; w: (K, k) weights."""
+    nrm = np.einsum("kj,kjd->kd", w, n)
+    nrm /= np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
+    a = np.cross(nrm, [1.0, 0.0, 0.0])
+    weak = np.linalg.norm(a, axis=1) < 0.1  # the normal along x: another helper axis
+    a[weak] = np.cross(nrm[weak], [0.0, 1.0, 0.0])
+    a /= np.linalg.norm(a, axis=1)[:, None]
+    b = np.cross(nrm, a)
+    q = p - x[:, None, :]
+    u, v, h = (np.einsum("kjd,kd->kj", q, e) for e in (a, b, nrm))
+    A = np.stack([u * u, u * v, v * v, u, v, np.ones_like(u)], axis=2)  # (K, k, 6)
+    M = np.einsum("kj,kja,kjb->kab", w, A, A) + 1e-12 * np.eye(6)
+    co = np.linalg.solve(M, np.einsum("kj,kja,kj->ka", w, A, h)[..., None])[..., 0]
+    hess = np.stack([np.stack([2 * co[:, 0], co[:, 1]], 1), np.stack([co[:, 1], 2 * co[:, 2]], 1)], 1)
+    k = np.linalg.eigvalsh(hess)  # (K, 2), ascending
+    big = np.maximum(np.abs(k).max(axis=1) ** 2, 1e-300)
+    return np.where(k[:, 0] * k[:, 1] < 0, -k[:, 0] * k[:, 1] / big, 0.0)
+
+
 def project(points: NDArray[np.float64], data: NDArray[np.float64], normals: NDArray[np.float64], *,
             spacing: float, reach: float = 1.5, margin: float = 3.0, near: tuple[float, float] = (3.0, 6.0),
-            disagree: tuple[float, float] | None = (0.25, 0.75), neighbours: int = 64, iterations: int = 2,
-            tree: cKDTree | None = None) -> NDArray[np.float64]:
+            disagree: tuple[float, float] | None = (0.25, 0.75), saddle: tuple[float, float] | None = (0.3, 0.5),
+            neighbours: int = 64, iterations: int = 2, tree: cKDTree | None = None) -> NDArray[np.float64]:
     """Move ``points`` (K, 3) towards the APSS of ``data`` (M, 3) with unit ``normals`` (module
-    docstring). ``spacing``: the data's edge length l. ``near``, ``disagree``: the trust ramps of
-    the module docstring, in units of l (``disagree=None``: no agreement test). A point whose fit
-    is degenerate or reads fewer than 6 data points stays. Returns the new (K, 3) positions.
+    docstring). ``spacing``: the data's edge length l. ``near``, ``disagree``, ``saddle``: the trust
+    ramps of the module docstring (the first two in units of l; None: no such test). A point whose
+    fit is degenerate or reads fewer than 6 data points stays. Returns the new (K, 3) positions.
     """
     x = np.array(points, dtype=np.float64, copy=True).reshape(-1, 3)
     P = np.asarray(data, dtype=np.float64).reshape(-1, 3)
@@ -119,6 +149,12 @@ def project(points: NDArray[np.float64], data: NDArray[np.float64], normals: NDA
         if not it and disagree is not None:
             gap = np.linalg.norm(np.nan_to_num(off), axis=1) / spacing
             tr = tr * np.clip((gap - disagree[0]) / (disagree[1] - disagree[0]), 0.0, 1.0)
+        if not it and saddle is not None and (tr > 0).any():
+            s = np.ones(len(y))
+            m = tr > 0
+            s[m] = np.clip((saddle[1] - saddle_measure(y[m], P[idx[m]], N[idx[m]], w[m])) / (saddle[1] - saddle[0]),
+                           0.0, 1.0)
+            tr = tr * s
         x[sel[ok]] += tr[ok, None] * off[ok]
         if not it:  # the points the fairing already placed stay: later iterations skip them
             keep = tr > 0
