@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -1061,4 +1061,3 @@ def _class_found(n_islands: int, n_loops: int, tunnel: bool) -> str:
     return "ICM1"
 
 
-_ = field  # dataclasses.field kept for future record fields
