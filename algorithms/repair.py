@@ -1059,5 +1059,3 @@ def _class_found(n_islands: int, n_loops: int, tunnel: bool) -> str:
     if n_loops == 0:
         return "closed"
     return "ICM1"
-
-
