@@ -256,16 +256,79 @@ def missing_edges(ends: CreaseEnds, v: int,
 
 
 def hermite(p0: NDArray[np.float64], d0: NDArray[np.float64], p1: NDArray[np.float64], d1: NDArray[np.float64],
-            spacing: float) -> NDArray[np.float64]:
+            spacing: float, lead: tuple[float, float] = (0.0, 0.0), least: int = 1) -> NDArray[np.float64]:
     """Interior points of the cubic Hermite curve from p0 (tangent d0) to p1 (tangent d1), tangents
     scaled by the chord length, evenly about ``spacing`` apart along the curve; at least one (a
-    chain without interior points would be a chord that may already be an edge of the surface)."""
+    chain without interior points would be a chord that may already be an edge of the surface).
+    ``lead``: the arc lengths the first and last points keep from p0 and p1 at least
+    (``end_clearance``; ``spaced_chain``, with ``least``: 0 lets a curve whose end is a new chain vertex
+    have none)."""
     L = float(np.linalg.norm(p1 - p0))
     t = np.linspace(0.0, 1.0, 65)[:, None]  # dense, then resampled by arc length
     h00, h10, h01, h11 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t, -2 * t**3 + 3 * t**2, t**3 - t**2
     curve = h00 * p0 + h10 * L * d0 + h01 * p1 + h11 * L * d1
     length = float(np.linalg.norm(np.diff(curve, axis=0), axis=1).sum())
-    return resample_chain(curve, min(spacing, length / 2))
+    return spaced_chain(curve, min(spacing, length / 2), lead, least=least)
+
+
+def spaced_chain(curve: NDArray[np.float64], spacing: float, lead: tuple[float, float] = (0.0, 0.0), *,
+                 least: int = 1) -> NDArray[np.float64]:
+    """Interior points of the polyline ``curve`` about ``spacing`` apart by arc length
+    (bridge_graph.resample_chain), the first at least ``lead[0]`` from its start and the last at least
+    ``lead[1]`` from its end (``end_clearance``). No lead longer than the even step: resample_chain's
+    points exactly. Otherwise that end's point moves out to its lead and the points between are
+    spaced evenly again; where the room left is under half the spacing: with both leads, one point
+    midway between them; with one, no point when ``least`` is 0 (the curve's other end is a new chain
+    vertex, e.g. a corner point), else one at the lead, kept a quarter of the curve from either end."""
+    p = np.asarray(curve, dtype=np.float64)
+    even = resample_chain(p, spacing)
+    seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    total = float(seg.sum())
+    step = total / (len(even) + 1)
+    if total <= 0 or (lead[0] <= step and lead[1] <= step):
+        return even
+    start = float(lead[0]) if lead[0] > step else 0.0
+    stop = total - float(lead[1]) if lead[1] > step else total
+    if stop - start < 0.5 * spacing:  # no room for the points between
+        if start > 0 and stop < total:
+            t = np.array([(start + stop) / 2])
+        elif not least:
+            return np.zeros((0, 3))
+        else:
+            t = np.array([start if start > 0 else stop])
+        t = np.clip(t, 0.25 * total, 0.75 * total)
+    else:
+        t = np.linspace(start, stop, max(1, int(round((stop - start) / spacing))) + 1)
+        t = t[1 if start == 0.0 else 0:len(t) - 1 if stop == total else len(t)]  # the ends are vertices
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    return np.stack([np.interp(t, s, p[:, k]) for k in range(3)], axis=1)
+
+
+def end_clearance(V: NDArray[np.float64], polygon: tuple[int, ...], k: int, d: NDArray[np.float64], *,
+                  min_angle: float = 22.0) -> float:
+    """How far along its direction ``d`` (unit, into the hole) the first vertex of a chain leaving
+    polygon position k must lie: 0 unless a border edge (e, w) at the chain's end e makes an angle
+    theta < 2 ``min_angle`` with d. Such a wedge holds one patch face only (a second face at e would
+    halve theta, below ``min_angle``), and with both its edges fixed (a kept border edge, a locked
+    crease chain edge) that face is (e, c, w), c the chain's first vertex: by the law of sines its
+    angle at w is at least ``min_angle`` once |e c| >= |e w| sin(min_angle) / sin(pi - theta -
+    min_angle). A chain vertex at the even spacing beside a long border edge made it a sliver
+    (featuretype: a crease end beside a 0.93 border edge at 19.3 degrees, the first vertex 0.31 along:
+    a 7.1 degree angle at the edge's far end on each side of the crease). Default 22 degrees: the
+    angle refinement's bound and its margin (darning.refine.refine_angles)."""
+    n = len(polygon)
+    e = V[polygon[k]]
+    t = np.radians(min_angle)
+    need = 0.0
+    for w in (polygon[(k - 1) % n], polygon[(k + 1) % n]):
+        u = V[w] - e
+        L = float(np.linalg.norm(u))
+        if L <= 0:
+            continue
+        theta = float(np.arctan2(np.linalg.norm(np.cross(u, d)), u @ d))
+        if theta < 2 * t:
+            need = max(need, L * np.sin(t) / np.sin(np.pi - theta - t))
+    return need
 
 
 Valid = Callable[[int, int, NDArray[np.float64]], bool]  # (position i, position j or -1, chain points)
@@ -441,7 +504,8 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
             u /= L
             a, b = float(di @ u), float(-dj @ u)
             if a > lim and b > lim:
-                found.append((a + b, i, j, hermite(V[polygon[i]], di, V[polygon[j]], -dj, spacing)))
+                lead = (end_clearance(V, polygon, i, di), end_clearance(V, polygon, j, dj))
+                found.append((a + b, i, j, hermite(V[polygon[i]], di, V[polygon[j]], -dj, spacing, lead)))
     for q, i, j, pts in sorted(found, key=lambda x: -x[0]):  # the best pair first (stable for ties)
         if valid is None or valid(i, j, pts):
             return CreaseSplit(int(i), int(j), pts, min(float(q), 2.0))
@@ -481,7 +545,9 @@ def crease_line(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEn
         if hit is not None:
             found.append((hit[1], k, hit[0]))
     for _, i, j in sorted(found, key=lambda x: x[0]):
-        pts = resample_chain(np.vstack([V[polygon[i]], V[polygon[j]]]), spacing)
+        u = _unit(V[polygon[j]] - V[polygon[i]])
+        pts = spaced_chain(np.vstack([V[polygon[i]], V[polygon[j]]]), spacing,
+                           (end_clearance(V, polygon, i, u), end_clearance(V, polygon, j, -u)))
         if not len(pts):
             pts = ((V[polygon[i]] + V[polygon[j]]) / 2)[None]
         if valid is None or valid(i, j, pts):
@@ -559,7 +625,7 @@ def crease_corner(V: NDArray[np.float64], polygon: tuple[int, ...], ends: Crease
             if hit is not None:
                 k = hit[0]
                 dk = _unit(C - V[polygon[k]])
-    a = hermite(V[polygon[i]], di, C, di, spacing)
-    b = hermite(C, -dj, V[polygon[j]], -dj, spacing)
+    a = hermite(V[polygon[i]], di, C, di, spacing, (end_clearance(V, polygon, i, di), 0.0), least=0)
+    b = hermite(C, -dj, V[polygon[j]], -dj, spacing, (0.0, end_clearance(V, polygon, j, dj)), least=0)
     pts = np.vstack([a, C[None], b])
     return CreaseSplit(int(i), int(j), pts, float(3 - 3 * best[0])), int(k), C, dk

@@ -161,3 +161,54 @@ def test_surface_covers_points_on_faces_not_beside_the_border():
     assert not s.crossed_by(a, ((a + b) / 2)[None], b, 1e-6, 0.1)  # the diagonal across the hole
     c = V[idx[3, 2]]
     assert s.crossed_by(a, ((a + c) / 2)[None], c, 1e-6, 0.1)  # across the hole, then over the faces x > 2
+
+
+def _wedge_angle_at_w(e, c, w):
+    u, v = e - w, c - w
+    return np.degrees(np.arctan2(np.linalg.norm(np.cross(u, v)), u @ v))
+
+
+def test_end_clearance_gives_the_far_corner_its_angle():
+    # a crease end e at the origin, the chain along +x, a border edge (e, w) of length 0.93 at 19.3 deg
+    # to the chain on one side, a short one at 100 deg on the other: only the narrow wedge asks for room
+    from algorithms.creases import end_clearance
+
+    th = np.radians(19.3)
+    V = np.array([[0.0, 0, 0], [0.93 * np.cos(th), 0.93 * np.sin(th), 0], [-0.02, -0.1, 0], [0.5, -2, 0]])
+    d = np.array([1.0, 0, 0])
+    s = end_clearance(V, (0, 1, 3, 2), 0, d)
+    # law of sines: the triangle (e, e + s d, w) has exactly 22 degrees at w
+    assert np.isclose(_wedge_angle_at_w(V[0], s * d, V[1]), 22.0, atol=1e-9)
+    assert 0.5 < s < 0.93
+    # any chain vertex nearer leaves a smaller angle at w (the spacing's 0.31: 9.1 deg)
+    assert _wedge_angle_at_w(V[0], 0.31 * d, V[1]) < 9.2
+    # a wedge of 2 x 22 deg or more holds two faces: no clearance asked
+    wide = np.radians(44.5)
+    V2 = V.copy()
+    V2[1] = [0.93 * np.cos(wide), 0.93 * np.sin(wide), 0]
+    assert end_clearance(V2, (0, 1, 3, 2), 0, d) == 0.0
+
+
+def test_spaced_chain_keeps_the_leads_and_the_even_spacing():
+    from algorithms.bridge_graph import resample_chain
+    from algorithms.creases import spaced_chain
+
+    line = np.array([[0.0, 0, 0], [1.25, 0, 0]])
+    even = resample_chain(line, 0.3125)
+    np.testing.assert_array_equal(spaced_chain(line, 0.3125), even)  # no lead: resample_chain's points
+    np.testing.assert_array_equal(spaced_chain(line, 0.3125, (0.3, 0.1)), even)  # leads within the step
+    pts = spaced_chain(line, 0.3125, (0.64, 0.0))
+    x = pts[:, 0]
+    assert np.isclose(x[0], 0.64) and np.all(np.diff(x) > 0) and x[-1] < 1.25
+    gaps = np.diff(np.r_[x, 1.25])
+    assert np.allclose(gaps, gaps[0]) and 0.5 * 0.3125 <= gaps[0] <= 1.5 * 0.3125  # even again after the lead
+    np.testing.assert_allclose(pts[:, 1:], 0.0)
+    # both leads: the first and last points at them
+    both = spaced_chain(line, 0.3125, (0.4, 0.5))[:, 0]
+    assert np.isclose(both[0], 0.4) and np.isclose(both[-1], 0.75)
+    # a lead leaving under half the spacing before a new chain vertex: no point (least=0), or one kept
+    # a quarter of the curve from the end (the default, a chain between two border vertices)
+    short = np.array([[0.0, 0, 0], [0.744, 0, 0]])
+    assert len(spaced_chain(short, 0.3125, (0.0, 0.685), least=0)) == 0
+    one = spaced_chain(short, 0.3125, (0.0, 0.685))
+    assert len(one) == 1 and np.isclose(one[0, 0], 0.25 * 0.744)

@@ -174,3 +174,43 @@ def test_encroached_finds_a_long_segment_among_short_ones():
         brute |= _view(v, a, b, x) > 120.0
     assert brute.sum() > 50
     assert np.array_equal(_encroached(v, seg, x), brute)
+
+
+def test_collapse_with_a_bound_never_adds_faces_below_it():
+    # random stars of one free vertex (the ring's edges on the border): a collapse made with ``below``
+    # raises the star's smallest angle and leaves no more faces below 20 deg than there were; without
+    # the bound the smallest angle alone decides, and some collapses add faces below 20 deg
+    import sys
+
+    R = sys.modules["algorithms.darning.refine"]
+    rng = np.random.default_rng(0)
+    worse_without = checked = 0
+    for _ in range(120):
+        k = int(rng.integers(5, 9))
+        t = np.sort(rng.uniform(0, 2 * np.pi, k))
+        r = rng.uniform(0.6, 1.4, k)
+        ring_v = np.c_[r * np.cos(t), r * np.sin(t), np.zeros(k)]
+        v = np.vstack([ring_v, np.c_[3 * np.cos(t), 3 * np.sin(t), np.zeros(k)], [[*rng.uniform(-0.3, 0.3, 2), 0.0]]])
+        i = np.arange(k)
+        j = (i + 1) % k
+        ring = np.vstack([np.stack([j, i, k + i], 1), np.stack([j, k + i, k + j], 1)])
+        patch = np.stack([i, j, np.full(k, 2 * k)], 1)
+        a0 = np.degrees(corner_angles(v, patch).min(axis=1))
+        bad = np.flatnonzero(a0 < 22)
+        if not len(bad):
+            continue
+        free = np.zeros(len(v), dtype=bool)
+        free[2 * k] = True
+        for below in (None, np.radians(20.0)):
+            p = v.copy()
+            f, n = R._collapse_bad(p, patch.copy(), ring, None, free, bad, below=below)
+            if not n or 2 * k in f:
+                continue  # nothing done, or the vertex moved instead
+            a1 = np.degrees(corner_angles(p, f).min(axis=1))
+            assert a1.min() > a0.min()
+            if below is None:
+                worse_without += int((a1 < 20).sum() > (a0 < 20).sum())
+            else:
+                checked += 1
+                assert (a1 < 20).sum() <= (a0 < 20).sum()
+    assert checked > 20 and worse_without > 0

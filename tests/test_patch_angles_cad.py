@@ -1,0 +1,58 @@
+"""Patch angles beside the crease chains of a CAD part (featuretype.stl, shared data): a crease chain
+leaving a border vertex at a narrow angle to a long border edge keeps its first vertex far enough
+out that the one face the wedge holds is not a sliver (creases.end_clearance)."""
+
+import numpy as np
+from conftest import data_file
+from scipy.spatial import cKDTree
+
+from algorithms import cases as gen
+from algorithms.io import load_raw
+from algorithms.mesh import Mesh
+from algorithms.metrics import triangle_angles
+from algorithms.normalize import normalize
+from algorithms.repair import repair
+from algorithms.topology import edge_table
+
+
+def _featuretype_hole():
+    """bench.cases' featuretype-hole: a hole across the top face and a side of featuretype.stl."""
+    from bench.cases import ball, surface_point
+
+    v, f = load_raw(data_file("featuretype.stl"))
+    ft = Mesh(v, f)
+    d = ft.bbox_diagonal()
+    fh = ball(ft, surface_point(ft, [0.1, 0.2, 1]), 0.12 * d) | ball(ft, surface_point(ft, [1, 0.3, 0.2]), 0.108 * d)
+    return gen.cut(ft, fh, name="featuretype-hole", description="").incomplete
+
+
+def test_crease_chain_ends_leave_no_sliver_on_a_long_border_edge():
+    cut = _featuretype_hole()
+    res = repair(normalize(cut.vertices, cut.faces))
+    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
+    patch = F[res.new_faces]
+    et = edge_table(np.asarray(cut.faces))
+    border = {tuple(e) for e in np.sort(et.edges[et.counts == 1], axis=1)}
+    to_out = cKDTree(V)
+    # the input's vertex numbers in the output (every input face is kept, at the same positions)
+    _, idx = to_out.query(np.asarray(cut.vertices))
+    back = {int(o): i for i, o in enumerate(idx)}
+    creases = [b for b in res.bridges if b.kind == "crease" and len(b.points)]
+    assert creases
+    wedges = 0
+    for b in creases:
+        poly = b.polyline(V)
+        _, ids = to_out.query(np.vstack([poly[:2], poly[-2:][::-1]]))
+        for e, c in (ids[:2], ids[2:]):
+            for face in patch[(patch == e).any(axis=1) & (patch == c).any(axis=1)]:
+                w = int(next(x for x in face if x not in (e, c)))
+                if w not in back or int(e) not in back:
+                    continue
+                if tuple(sorted((back[int(e)], back[w]))) not in border:
+                    continue  # the wedge's other edge is a patch edge: it could be split
+                ang = triangle_angles(V, face[None])[0]
+                at = {int(x): a for x, a in zip(face, ang)}
+                if at[int(e)] < 44.0:  # a wedge with room for one face: its far corner keeps 20 deg
+                    wedges += 1
+                    assert at[w] >= 20.0, (at, face)
+    assert wedges >= 2  # the chain along the top face's edge: the top face's and the side's wedge
