@@ -524,6 +524,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         on_crease[ids] = True
     incidence = _Incidence(work.F(), work.n)
     patch_ids: list[NDArray[np.int64]] = []
+    beside: list[NDArray[np.int64]] = []  # bridge chain vertices on the border of a patch beside a crease
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
         V = work.V()
@@ -548,6 +549,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             alias = {int(c): int(k) for c, k in pairs}
             final[k + 1:] = [tuple(alias.get(x, x) for x in p) for p in final[k + 1:]]
             pinned = [merge_copies(a, pairs) for a in pinned]
+            beside = [merge_copies(a, pairs) for a in beside]
             locked = [merge_copies(a, pairs) for a in locked]
             on_crease[pairs[:, 1]] |= on_crease[pairs[:, 0]]
         work.faces.append(to_global[np.asarray(patch.faces, dtype=np.int64)])
@@ -558,6 +560,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             # and so are the bridge chains on its border: faired with the patches across the
             # creases left out of the system, they were thrown far off (featuretype: 0.5 -> 3 %)
             pinned.append(np.asarray([v for v in poly if v >= n_input], dtype=np.int64))
+            beside.append(pinned[-1])
     V, F = work.V(), work.F()
     if params.darning == "liepa-fair" and len(V) > n_input:
         # fair every new vertex together (patch interiors and bridge chains), the input fixed:
@@ -644,6 +647,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
         # then Delaunay refinement for the angles (darning.refine_angles: flips first, points only
         # where a triangle stays below the angle bound and is not forced by the border)
+        if beside and len(crease_v):  # chains _fair_sides moved off their force lines: the angle moves may too
+            movable = np.union1d(movable, np.setdiff1d(np.concatenate(beside), crease_v))
         q = refine_angles(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None, movable=movable)
         V, F = q.vertices, np.vstack([fixed, q.faces])
     timings["darn"] = time.perf_counter() - t0
