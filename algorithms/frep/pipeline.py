@@ -186,7 +186,7 @@ def _merge_region(faces: NDArray[np.int64], patch: NDArray[np.bool_], side: NDAr
 
 
 def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: object) -> FrepResult:
-    from ..darning import darn, fair, refine  # the shared darning implementation
+    from ..darning import darn, fair, merge_copies, refine  # the shared darning implementation
 
     params = params or FrepParams(**kw)  # type: ignore[arg-type]
     timings: dict[str, float] = {}
@@ -206,8 +206,11 @@ def triangulate_object(obj: FRepObject, params: FrepParams | None = None, **kw: 
     if loops:
         on_loop[np.concatenate(loops)] = True
     near = F[on_loop[F].any(axis=1)]
-    patches = [darn(V, near, lp, method="liepa", weight=params.weight).faces for lp in loops]
-    pf = np.vstack([F, *patches]) if patches else F
+    done = [darn(V, near, lp, method="liepa", weight=params.weight) for lp in loops]
+    merged = [p.merged for p in done if len(p.merged)]  # a pinched loop joins coincident vertices (darning)
+    if merged:
+        F = merge_copies(F, np.vstack(merged))
+    pf = np.vstack([F, *(p.faces for p in done)]) if done else F
     filled = Mesh(V, pf)
     filled_patch = np.r_[np.zeros(len(F), bool), np.ones(len(pf) - len(F), bool)]
     timings["filling"] = time.perf_counter() - t0
