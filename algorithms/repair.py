@@ -649,6 +649,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         # where a triangle stays below the angle bound and is not forced by the border)
         if beside and len(crease_v):  # chains _fair_sides moved off their force lines: the angle moves may too
             movable = np.union1d(movable, np.setdiff1d(np.concatenate(beside), crease_v))
+        if len(keep_still):  # a pinned vertex on a plane (a CAD face) may move in it: tangential moves stay on it
+            movable = np.union1d(movable, _flat_stars(V, F, np.setdiff1d(keep_still, crease_v), 1.5))
         q = refine_angles(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None, movable=movable)
         V, F = q.vertices, np.vstack([fixed, q.faces])
     timings["darn"] = time.perf_counter() - t0
@@ -929,6 +931,25 @@ def _fair_sides(V: NDArray[np.float64], F: NDArray[np.int64], n_before: int, n_i
                 used = f"{op} {w} by crease sides"
                 break
     return out, used
+
+
+def _flat_stars(V: NDArray[np.float64], F: NDArray[np.int64], which: NDArray[np.int64],
+                max_turn: float) -> NDArray[np.int64]:
+    """The vertices of ``which`` whose faces all face within ``max_turn`` degrees of their mean normal."""
+    which = np.unique(which)
+    if not len(which):
+        return which
+    t = V[F]
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    acc = np.zeros((len(V), 3))
+    for k in range(3):
+        np.add.at(acc, F[:, k], n)
+    acc /= np.maximum(np.linalg.norm(acc, axis=1), 1e-300)[:, None]
+    worst = np.full(len(V), 1.0)
+    for k in range(3):
+        np.minimum.at(worst, F[:, k], np.einsum("ij,ij->i", n, acc[F[:, k]]))
+    return which[worst[which] >= np.cos(np.radians(max_turn))]
 
 
 def _thin_tips(V: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int, N: NDArray[np.float64],

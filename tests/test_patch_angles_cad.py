@@ -84,3 +84,35 @@ def test_split_chains_beside_creases_do_not_hug_an_input_edge(repaired):
                 checked += 1
                 assert ang[k] <= 145.0, (face, ang)  # the other two angles sum to >= 35 deg
     assert checked >= 3
+
+
+def test_unforced_slivers_on_featuretype(repaired):
+    """featuretype-hole's patch: unforced angles (not between two input border edges) of at least 13
+    deg, and at most three faces below 15 deg (measured: 13.2 twice, beside a 0.41 border edge next
+    to the 0.04 edges of a boss rim, and 14.3 between a border edge and a continued crease; before
+    pinned vertices on a plane could move in the angle refinement, a fourth at 14.6 deg)."""
+    from algorithms.metrics import forced_faces, min_angles
+
+    cut, res = repaired
+    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
+    patch = F[res.new_faces]
+    _, idx = cKDTree(V).query(np.asarray(cut.vertices))
+    et = edge_table(np.asarray(cut.faces))
+    forced = forced_faces(V, patch, idx[et.edges[et.counts == 1]])
+    ang = min_angles(V, patch)[~forced]
+    assert ang.min() >= 13.0
+    assert (ang < 15.0).sum() <= 3
+
+
+def test_flat_stars():
+    from algorithms.repair import _flat_stars
+
+    # a fan of 6 faces around vertex 0 in the plane z = 0, then the same fan with one rim vertex lifted
+    a = np.linspace(0, 2 * np.pi, 7)[:-1]
+    V = np.vstack([[0.0, 0.0, 0.0], np.c_[np.cos(a), np.sin(a), np.zeros(6)]])
+    F = np.array([[0, 1 + k, 1 + (k + 1) % 6] for k in range(6)])
+    assert _flat_stars(V, F, np.array([0]), 1.5).tolist() == [0]
+    V2 = V.copy()
+    V2[3, 2] = 0.1  # its two faces turn by ~5.7 degrees
+    assert _flat_stars(V2, F, np.array([0]), 1.5).tolist() == []
+    assert _flat_stars(V2, F, np.array([0]), 10.0).tolist() == [0]
