@@ -362,22 +362,24 @@ class Surface:
         projects onto that edge, not inside the face)."""
         q = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         out = np.zeros(len(q), dtype=bool)
-        for i, x in enumerate(q):  # few chain points; each against the faces whose box holds it
-            near = np.flatnonzero(np.all((self.lo - tol <= x) & (x <= self.hi + tol), axis=1))
-            if not len(near):
+        for s0 in range(0, len(q), 64):  # chunks of points against every face's box at once
+            x = q[s0:s0 + 64]
+            near = np.all((self.lo[None] - tol <= x[:, None]) & (x[:, None] <= self.hi[None] + tol), axis=2)
+            pi, fi = np.nonzero(near)
+            if not len(pi):
                 continue
-            t = self.t[near]
-            e0, e1, w = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0], x - t[:, 0]
+            t = self.t[fi]
+            e0, e1, w = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0], x[pi] - t[:, 0]
             n = np.cross(e0, e1)
             nn = np.linalg.norm(n, axis=1)
-            ok = nn > 0
             h = np.abs(np.einsum("ij,ij->i", w, n)) / np.maximum(nn, 1e-300)
             d00, d01, d11 = (e0 * e0).sum(1), (e0 * e1).sum(1), (e1 * e1).sum(1)
             d20, d21 = (w * e0).sum(1), (w * e1).sum(1)
             den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
-            s = (d11 * d20 - d01 * d21) / den
-            r = (d00 * d21 - d01 * d20) / den
-            out[i] = bool((ok & (h <= tol) & (s > margin) & (r > margin) & (1 - s - r > margin)).any())
+            a = (d11 * d20 - d01 * d21) / den
+            b = (d00 * d21 - d01 * d20) / den
+            hit = (nn > 0) & (h <= tol) & (a > margin) & (b > margin) & (1 - a - b > margin)
+            out[s0 + pi[hit]] = True
         return out
 
     def crossed_by(self, p0: NDArray[np.float64], pts: NDArray[np.float64], p1: NDArray[np.float64],
@@ -603,16 +605,16 @@ def crease_corner(V: NDArray[np.float64], polygon: tuple[int, ...], ends: Crease
             continue
         miss = np.linalg.norm(P + t[:, None] * D - C, axis=1) / t
         key = float(miss.max())  # the best meeting (the first found of equal ones)
-        if valid is not None and np.all(miss < max_miss) and (best is None or key < best[4]):
-            # each leg to C must stay in the hole (``valid``: e.g. not over the input surface)
-            legs = [hermite(V[polygon[k]], d, C, d, spacing) for k, d, _, _ in tri]
-            if not all(valid(k, -1, np.vstack([lg, C[None]])) for (k, _, _, _), lg in zip(tri, legs)):
-                continue
-        if np.all(miss < max_miss) and (best is None or key < best[4]):
-            best = (float(miss.max()), tri, C, t, key)
+        if key >= max_miss or (best is not None and key >= best[0]):
+            continue
+        # each leg to C must stay in the hole (``valid``: e.g. not over the input surface)
+        legs = [hermite(V[polygon[k]], d, C, d, spacing) for k, d, _, _ in tri] if valid is not None else []
+        if not all(valid(k, -1, np.vstack([lg, C[None]])) for (k, _, _, _), lg in zip(tri, legs)):
+            continue
+        best = (key, tri, C)
     if best is None:
         return None
-    _, tri, C, t, _ = best
+    _, tri, C = best
     (i, di, ni, _), (j, dj, nj, _) = tri[:2]
     k, dk = (tri[2][0], tri[2][1]) if rays == 3 else (-1, None)
     if rays == 2:  # the third edge: the two normals that are not shared
