@@ -23,10 +23,6 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-KERNEL_MODULES = ("algorithms.field.indicator", "algorithms.field.light_tracer", "algorithms.field.free_points",
-                  "algorithms.field.shielding", "algorithms.force_lines", "algorithms.darning.liepa",
-                  "algorithms.darning.flips", "algorithms.darning.refine_kernels", "algorithms.darning.implicit")
-
 
 def kernels() -> Iterator[tuple[str, object]]:
     """(qualified name, dispatcher) of every numba-compiled function of the package."""
