@@ -939,6 +939,7 @@ def _flat_stars(V: NDArray[np.float64], F: NDArray[np.int64], which: NDArray[np.
     which = np.unique(which)
     if not len(which):
         return which
+    F = F[np.isin(F, which).any(axis=1)]  # the stars of ``which`` only
     t = V[F]
     n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
