@@ -86,3 +86,15 @@ def test_capped_q2_is_exact_below_the_cap_and_certain_above_it():
                 assert c == pytest.approx(q, rel=1e-12)
             else:
                 assert cap < c <= q * (1 + 1e-12)
+
+
+def test_one_free_point():
+    """A single free point (a cut that leaves one loose vertex) builds its field like many do: the
+    k-d tree query for one neighbour returns flat arrays (full mode crashed on it)."""
+    fp = free_points(np.array([[0.0, 0.0, 0.0]]), kt=0.5, rc=0.2)
+    assert praf_potential(fp, [[0.0, 0, 0]])[0] == pytest.approx(g0(0.5), rel=1e-6)
+    assert praf_potential(fp, [[0.0, 0, 5.0]])[0] == 0.0
+    x, o = np.array([[-0.3, 0.0, 0.0]]), np.array([[0.3, 0.0, 0.0]])
+    ref = q2_segment(x[0], o[0], fp.points, kt=0.5, rc=0.2, samples=8)
+    np.testing.assert_allclose(q2_many(fp, x, o, exact=True), [ref], rtol=1e-3)
+    assert ref < 0.6

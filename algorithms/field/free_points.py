@@ -83,6 +83,7 @@ def free_points(points: NDArray[np.float64], *, kt: float, rc: float, kernel: st
     # themselves (G decreases with distance); 1.25 x the largest sum at a free point + G's tail
     k = min(len(p), 32)
     dist, _ = tree.query(p, k=k, distance_upper_bound=cut)
+    dist = np.asarray(dist).reshape(len(p), k)  # k = 1 (a single free point) gives a flat array
     dist = np.where(np.isfinite(dist), dist, np.inf)
     gs = free_point_g(dist, kt, rc, kernel).sum(axis=1)
     gmax = 1.25 * float(gs.max()) + g0(kt) * 1e-4 * len(p)
