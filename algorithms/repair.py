@@ -317,15 +317,22 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                         if len(qs) >= 3 and med[key] >= 0.5 * min(best[key[0]], best[key[1]])}
         cands.sort(key=lambda c: (-support[tuple(sorted((loop_of[c[0].start][0], loop_of[c[0].end][0])))],
                                   -c[0].quality))
+        joined: set[tuple[int, int]] = set()  # loop pairs a kept island bridge joins
         for b, ln in cands:
             n_arrived += 1
             why = state.conflict(b)
             pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
-            if why is None and guard.effect(b.start, b.end) == "handle" and pair not in handle_pairs:
-                why = "would join two holes of one surface (a handle the tunnel rule does not support)"
+            if why is None and guard.effect(b.start, b.end) == "handle":
+                if pair not in handle_pairs:
+                    why = "would join two holes of one surface (a handle the tunnel rule does not support)"
+                elif pair in joined:  # a handle is a second band (a torus in pieces), never a line across
+                    # the bridges of the same two loops in crossed order (bunny cut by a slab and balls:
+                    # a small island in the band came back with a handle)
+                    why = "would join two holes of one surface across the bridges of the same loops (crossed order)"
             if why is None:
                 keep(b, ln)
                 guard.add(b)
+                joined.add(pair)  # type: ignore[arg-type]
             else:
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
