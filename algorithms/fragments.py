@@ -54,14 +54,18 @@ def _fragments(model: Icadm) -> list[tuple[list[int], NDArray[np.int64]]]:
 
 def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
                      normals: NDArray[np.float64]) -> Attached:
-    """Walk every set-aside fragment that hangs at one vertex of one hole polygon into that polygon.
+    """Walk every set-aside fragment that hangs at vertices of one hole polygon into that polygon.
 
     polygons: hole polygons (surface on their left). normals: vertex normals of the working
     vertex array (the model's vertices first). A fragment is attached when it is an oriented disk
-    (one boundary loop, Euler characteristic 1), exactly one of its vertices is used by the kept
-    surface, and that vertex occurs exactly once in all the polygons; others stay set aside (noted).
+    (one boundary loop, Euler characteristic 1) whose vertices used by the kept surface lie on its
+    loop and each occur exactly once in the polygons, all in one polygon; others stay set aside
+    (noted). Hanging at one vertex, its loop is walked into the polygon (the pipeline bridges the
+    pinch, ``fragment_bridge``); at several (a triangle left across a hole by a cut, its corners on
+    the hole's border), it cuts the polygon into the holes around it (``_walk_around``).
     """
     polys = [tuple(int(x) for x in p) for p in polygons]
+    src = list(range(len(polys)))  # the input polygon each polygon comes from
     out_f: list[NDArray[np.int64]] = []
     in_ids: list[int] = []
     at: list[int] = []
@@ -75,64 +79,102 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
     origin = model.vertex_origin if model.vertex_origin is not None else np.arange(model.mesh.n_vertices)
     used = np.zeros(len(V), dtype=bool)
     used[np.asarray(origin)[model.mesh.faces.ravel()]] = True
-    where: dict[int, list[tuple[int, int]]] = {}  # input vertex -> (polygon, vertex) of each occurrence
-    for k, p in enumerate(polys):
-        for m in p:
-            if m < len(origin):
-                where.setdefault(int(origin[m]), []).append((k, m))
+
+    def occurrences() -> dict[int, list[tuple[int, int]]]:
+        """input vertex -> (polygon, vertex) of each occurrence in the polygons as they are now"""
+        where: dict[int, list[tuple[int, int]]] = {}
+        for k, p in enumerate(polys):
+            for m in p:
+                if m < len(origin):
+                    where.setdefault(int(origin[m]), []).append((k, m))
+        return where
+
+    taken: set[int] = set()  # one fragment per vertex: a second one there would need its own sector
     for fids, faces in frags:
         attach = [int(x) for x in np.unique(faces) if used[x]]
         label = f"fragment of face(s) {fids}"
         if not orientation_consistent(faces) or euler_characteristic(faces) != 1 or len(boundary_loops(faces)) != 1:
             notes.append(f"{label} left aside: not an oriented disk")
             continue
-        loops = boundary_loops(faces)
-        if len(attach) != 1 or len(where.get(attach[0], [])) != 1:
-            notes.append(f"{label} left aside: not hanging at one vertex of one hole")
+        loop = [int(x) for x in boundary_loops(faces)[0]]
+        where = occurrences()
+        spots = [where.get(a, []) for a in attach]
+        if not attach or any(len(w) != 1 for w in spots) or len({w[0][0] for w in spots}) != 1 or taken & set(attach):
+            notes.append(f"{label} left aside: not hanging at vertices of one hole, each passed once")
             continue
-        a = attach[0]
-        k, m = where[a][0]
-        i = polys[k].index(m)
-        loop = [int(x) for x in loops[0]]
-        if a not in loop:
-            notes.append(f"{label} left aside: its attachment vertex is inside it")
+        if any(a not in loop for a in attach):
+            notes.append(f"{label} left aside: an attachment vertex is inside it")
             continue
+        k = spots[0][0][0]
+        to_hole = {a: w[0][1] for a, w in zip(attach, spots)}  # fragment vertex -> the hole's vertex there
         t = V[faces]
         fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
-        flip = bool(fn @ normals[m] < 0)
+        flip = bool(fn @ normals[list(to_hole.values())].sum(axis=0) < 0)
         if flip:  # reverse the winding: the loop runs the other way
             faces = faces[:, ::-1]
             loop = loop[::-1]
             fn = -fn
-        s = loop.index(a)
-        walk = loop[s + 1:] + loop[:s]  # f1..fk: the loop after the attachment vertex
-        p = polys[k]
-        polys[k] = p[:i + 1] + tuple(walk) + (m,) + p[i + 1:]
-        out_f.append(np.where(faces == a, m, faces))
-        at.append(m)
+        if len(attach) == 1:
+            a, m = attach[0], to_hole[attach[0]]
+            s = loop.index(a)
+            walk = loop[s + 1:] + loop[:s]  # f1..fk: the loop after the attachment vertex
+            i = polys[k].index(m)
+            polys[k] = polys[k][:i + 1] + tuple(walk) + (m,) + polys[k][i + 1:]
+            at.append(m)
+        else:  # hanging at several vertices of the hole: the fragment cuts the hole into pieces
+            walk = [x for x in loop if x not in to_hole]
+            pieces = _walk_around(polys[k], [to_hole.get(x, x) for x in loop], set(to_hole.values()))
+            polys[k] = pieces[0] if pieces else ()  # () : the fragment closed the hole (dropped below)
+            polys += pieces[1:]
+            src += [src[k]] * (len(pieces) - 1)
+        out_f.append(np.vectorize(lambda x: to_hole.get(int(x), int(x)), otypes=[np.int64])(faces))
         in_ids += fids
         flips += [flip] * len(fids)
         unit = fn / max(float(np.linalg.norm(fn)), 1e-300)
         for x in walk:
             nrm_of[x] = unit
-        where.pop(a)  # one fragment per vertex: a second one there would need its own sector
+        taken |= set(attach)
     # fragments that touch each other at a vertex (a chain of fragments across the hole): the walk
     # passes that vertex twice, once on each fragment's loop; the chain cuts the hole in two there
     pieces: list[tuple[int, ...]] = []
     source: list[int] = []
     for k, p in enumerate(polys):
-        stack = [p]
+        stack = [p] if p else []
         while stack:
             q = stack.pop()
             cut = _pinch(q, nrm_of)
             if cut is None:
                 pieces.append(q)
-                source.append(k)
+                source.append(src[k])
             else:
                 i, j = cut
                 stack += [q[i:j], q[j:] + q[:i]]
     faces_out = np.vstack(out_f) if out_f else np.zeros((0, 3), dtype=np.int64)
     return Attached(pieces, faces_out, tuple(in_ids), tuple(flips), nrm_of, tuple(notes), tuple(source), tuple(at))
+
+
+def _walk_around(polygon: tuple[int, ...], loop: list[int], attach: set[int]) -> list[tuple[int, ...]]:
+    """The holes left when a fragment whose boundary ``loop`` (positive, attachment vertices already
+    numbered as the polygon's) touches ``polygon`` at the vertices ``attach``: the boundary of
+    surface + fragment, walked with both on the left. At an attachment vertex a walk arriving along
+    the polygon leaves along the fragment's loop and one arriving along the loop leaves along the
+    polygon (the rule of a single attachment vertex, applied at each). Two-vertex walks (a hole edge
+    and a fragment edge between the same two vertices: they become one inner edge) are dropped."""
+    nxt = {"p": {a: b for a, b in zip(polygon, polygon[1:] + polygon[:1])},
+           "f": {a: b for a, b in zip(loop, loop[1:] + loop[:1])}}
+    done: set[tuple[str, int]] = set()
+    out: list[tuple[int, ...]] = []
+    for dart in [("p", v) for v in polygon] + [("f", v) for v in loop]:
+        walk: list[int] = []
+        while dart not in done:
+            done.add(dart)
+            side, v = dart
+            walk.append(v)
+            w = nxt[side][v]
+            dart = ("f" if side == "p" else "p", w) if w in attach else (side, w)
+        if len(walk) >= 3:
+            out.append(tuple(walk))
+    return out
 
 
 def _pinch(polygon: tuple[int, ...], fragment_vertices: dict[int, NDArray[np.float64]]) -> tuple[int, int] | None:
