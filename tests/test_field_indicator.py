@@ -121,6 +121,14 @@ def test_single_point_closed_form_normal_matches_the_eigenvector():
         assert abs(n @ n_ref[0]) == pytest.approx(1.0, abs=1e-9)
         assert n @ hint >= 0 and np.linalg.norm(f) == pytest.approx(ten[0], rel=1e-9)
         np.testing.assert_allclose(f, H @ n, atol=1e-12)
+    # no tangent (a traced line whose target is its last point): unconstrained, as top_normal with
+    # t = 0; the compiled tracer raised ZeroDivisionError there (featuretype cut by a slab)
+    for _ in range(10):
+        H, hint = rng.normal(size=(3, 3)), rng.normal(size=3)
+        n, f = _normal_one(H, np.zeros(3), hint)
+        n_ref, ten = top_normal(H[None], np.zeros((1, 3)), hint[None])
+        np.testing.assert_allclose(n, n_ref[0], atol=1e-9)
+        assert np.linalg.norm(f) == pytest.approx(np.linalg.svd(H, compute_uv=False)[0], rel=1e-9)
 
 
 def test_full_mode_single_point_path_matches_evaluate():

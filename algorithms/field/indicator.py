@@ -581,6 +581,12 @@ def _normal_one(hm, t, hint):
     whose top eigenvector has phi = atan2(2 b, a - c) / 2 (the same n as the top eigenvector of
     P H^T H P). Sign n . hint >= 0. Returns (n, H n)."""
     tn = np.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+    if not tn > 0.0:  # no direction (a line's target on its last point): unconstrained, as top_normal
+        _, vec = np.linalg.eigh(hm.T @ hm)  # with t = 0 (P = I): the top eigenvector of H^T H
+        n = vec[:, 2].copy()
+        if n[0] * hint[0] + n[1] * hint[1] + n[2] * hint[2] < 0:
+            n = -n
+        return n, hm @ n
     t0, t1, t2 = t[0] / tn, t[1] / tn, t[2] / tn
     if abs(t0) < 0.9:  # e1 = unit(t x x_axis) or unit(t x y_axis)
         e0, e1_, e2_ = 0.0, t2, -t1
