@@ -489,7 +489,10 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 continue
             i, j, q = sb
             pl = np.vstack([V[poly[i]], V[poly[j]]])
-            b = Bridge(int(poly[i]), int(poly[j]), resample_chain(pl, spacing), q, "island")
+            pts = resample_chain(pl, spacing)
+            if not len(pts) and _is_edge(work.F(), poly[i], poly[j]):  # as a split's bare chord below
+                pts = pl.mean(axis=0)[None]
+            b = Bridge(int(poly[i]), int(poly[j]), pts, q, "island")
             chain_normals = np.repeat(((N[poly[i]] + N[poly[j]]) / 2)[None], len(b.points), axis=0)
         else:
             frame = polygon_frame(V, N, poly, charge=params.field.charge)
@@ -508,6 +511,10 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
                 if np.linalg.norm(V[list(poly)] - pts[0], axis=1).min() <= 1e-9 * spacing:
                     pts = pts[:0]  # an earlier split already put its vertex there: no second copy
+            if not len(pts) and _is_edge(work.F(), poly[i], poly[j]):
+                # a bare chord that is an edge already (featuretype cut by a slab: the border edge of a
+                # two-face island between its two bridges) would be non-manifold: one vertex midway
+                pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
             b = Bridge(int(poly[i]), int(poly[j]), pts, float(line.quality), "split", len(lines) - 1)
             chain_normals = _chain_normals(line, b.points)
         ids = work.add_vertices(b.points, chain_normals)
@@ -938,6 +945,11 @@ def _fair_sides(V: NDArray[np.float64], F: NDArray[np.int64], n_before: int, n_i
                 used = f"{op} {w} by crease sides"
                 break
     return out, used
+
+
+def _is_edge(F: NDArray[np.int64], a: int, b: int) -> bool:
+    """Is (a, b) an edge of the faces F?"""
+    return bool(((F == a).any(axis=1) & (F == b).any(axis=1)).any())
 
 
 def _flat_stars(V: NDArray[np.float64], F: NDArray[np.int64], which: NDArray[np.int64],
