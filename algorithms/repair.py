@@ -352,14 +352,15 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             notes.append(f"islands {sorted(comps[0])} joined by a straight bridge: no force line joined them")
     timings["bridges"] = time.perf_counter() - t0
 
-    # 2. tunnels: among the non-trivial boundaries no island bridge reached (loops of islands
-    #    with two or more loops), joined by the best force lines; a tunnel needs two bridges
+    # 2. tunnels: among all non-trivial boundaries (spec §6 step 2: the loops of islands with two
+    #    or more loops, island bridges or not), joined by the best force lines; a tunnel needs two
+    #    bridges. (Leaving out the loops an island bridge reached lost a handle of featuretype cut
+    #    by a slab: the through-hole's rim left and the slab's loop its lower part reached.)
     t0 = time.perf_counter()
     if params.tunnels != "off":
         step(0.35, "looking for lost handles")
-        touched = {loop_of[v][0] for b in bridges for v in (b.start, b.end)}
         multi = {i.index for i in summary.islands if len(i.loops) >= 2}
-        free_loops = [k for k, f in enumerate(frames) if f.island in multi and k not in touched]
+        free_loops = [k for k, f in enumerate(frames) if f.island in multi]
         if len(free_loops) >= 2:
             tl = rf.tunnel_lines(model, frames, free_loops, params.field, force=params.tunnels == "on",
                                  cancel=cancel)
