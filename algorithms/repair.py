@@ -948,11 +948,6 @@ def _fair_sides(V: NDArray[np.float64], F: NDArray[np.int64], n_before: int, n_i
     return out, used
 
 
-def _is_edge(F: NDArray[np.int64], a: int, b: int) -> bool:
-    """Is (a, b) an edge of the faces F?"""
-    return bool(((F == a).any(axis=1) & (F == b).any(axis=1)).any())
-
-
 def _flat_stars(V: NDArray[np.float64], F: NDArray[np.int64], which: NDArray[np.int64],
                 max_turn: float) -> NDArray[np.int64]:
     """The vertices of ``which`` whose faces all face within ``max_turn`` degrees of their mean normal."""
