@@ -10,7 +10,9 @@ solve U = 0 with every other vertex fixed:
 
     (L^k)[free, free] x_free = -(L^k)[free, fixed] x_fixed,     k = 1 (U1) or 2 (U2),
 
-one sparse solve for the three coordinates (scipy.sparse.linalg.splu). The rows of L^2 at a free
+one sparse solve for the three coordinates (scipy.sparse.linalg.splu); a system of at most
+``DENSE_MAX`` free vertices (a hole's patch) is assembled compiled and solved with dense LU instead
+(fair_kernels.py: the same system; per-call overhead dominated the sparse route there). The rows of L^2 at a free
 vertex reach two rings out, so the hole border and one ring of fixed vertices beyond it act as
 the boundary condition (positions and tangents). The spec's iteration "solve, move, repeat"
 converges to this same fixed point; with uniform weights it is reached in one solve.
@@ -31,9 +33,13 @@ from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
 
 from ..topology import edge_table
+from .fair_kernels import dense_solve, power_system, relax_steps, ring_distance
 
 ORDERS = {"umbrella": 1, "U1": 1, "bilaplacian": 2, "U2": 2, "trilaplacian": 3, "U3": 3}
 WEIGHTINGS = ("uniform", "cotan")
+# **(choice)** systems of at most this many free vertices (a hole's patch) are assembled compiled and
+# solved with dense LU (_fair_solve_dense); larger ones (a whole mesh's new vertices) stay sparse
+DENSE_MAX = 800
 
 
 def uniform_laplacian(n_vertices: int, faces: NDArray[np.int64]) -> sp.csr_matrix:
@@ -138,6 +144,8 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
 def _fair_solve(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[np.int64], fixed: NDArray[np.int64],
                 k: int, bare: NDArray[np.int64] | None, *, strict: bool = False) -> NDArray[np.float64]:
     """Positions of the free vertices with L^k x = 0 there (lower powers near bare vertices)."""
+    if len(free) <= DENSE_MAX:
+        return _fair_solve_dense(L, out, free, k, bare, strict=strict)
     powers = [L]
     for _ in range(k - 1):  # L^k: k = 3 also matches curvature across the border
         powers.append((powers[-1] @ L).tocsr())
@@ -159,6 +167,35 @@ def _fair_solve(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[np.int
             rows = _mixed_rows(powers, free, order)
     rhs = -(rows[:, fixed] @ out[fixed])
     return _solve(rows[:, free].tocsr(), rhs, out[free], strict=strict)
+
+
+def _fair_solve_dense(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[np.int64], k: int,
+                      bare: NDArray[np.int64] | None, *, strict: bool = False) -> NDArray[np.float64]:
+    """_fair_solve for a patch of at most DENSE_MAX free vertices: the same system, its rows built
+    compiled (fair_kernels.power_system) and solved with dense LU (no sparse-matrix call overhead)."""
+    indptr = np.asarray(L.indptr, dtype=np.int64)
+    indices = np.asarray(L.indices, dtype=np.int64)
+    data = np.asarray(L.data, dtype=np.float64)
+    free = np.asarray(free, dtype=np.int64)
+    order = np.full(len(free), k, dtype=np.int64)
+    if k > 1 and bare is not None and len(bare):
+        # a free vertex j rings from a bare vertex solves L^min(k, j) = 0 (as in _fair_solve)
+        is_bare = np.zeros(len(out), dtype=bool)
+        is_bare[np.asarray(bare, dtype=np.int64)] = True
+        order = ring_distance(indptr, indices, data, is_bare, int(k))[free]
+    A, rhs = power_system(indptr, indices, data, free, order, np.ascontiguousarray(out, dtype=np.float64))
+    x0 = out[free]
+    zero = np.abs(A).sum(axis=1) == 0
+    if zero.any():  # a free vertex whose row vanished keeps its position (as in _solve)
+        A[zero, zero] = 1.0
+        rhs = np.where(zero[:, None], x0, rhs)
+    x, ok = dense_solve(A, rhs)
+    if ok and np.all(np.isfinite(x)):
+        return x
+    if strict:  # exactly singular
+        raise RuntimeError("singular fairing system")
+    eps = 1e-9 * float(np.abs(A).max())
+    return dense_solve(A + eps * np.eye(len(A)), rhs + eps * x0)[0]
 
 
 def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64], *,
@@ -208,15 +245,10 @@ def tangential_relax(vertices: NDArray[np.float64], faces: NDArray[np.int64], fr
     free = np.unique(np.asarray(free, dtype=np.int64))
     if not len(free) or not len(f):
         return v
-    L = uniform_laplacian(len(v), f)[free]
-    cols = f.T.ravel()
-    for _ in range(iterations):  # sequential: each step starts from the previous positions
-        t = v[f]
-        fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-        # vertex normals: the face normals summed per corner column (the order np.add.at would use)
-        n = np.stack([np.bincount(cols, weights=np.tile(fn[:, j], 3), minlength=len(v))[free] for j in range(3)], 1)
-        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-        d = L @ v  # centroid of the neighbours minus the vertex
-        d -= np.einsum("ij,ij->i", d, n)[:, None] * n
-        v[free] += step * d
+    L = uniform_laplacian(len(v), f)
+    # the steps run compiled (fair_kernels.relax_steps): a patch's few hundred vertices cost
+    # numpy call overhead, not arithmetic
+    relax_steps(v, np.ascontiguousarray(f), free, np.asarray(L.indptr, dtype=np.int64),
+                np.asarray(L.indices, dtype=np.int64), np.asarray(L.data, dtype=np.float64), int(iterations),
+                float(step))
     return v
