@@ -98,3 +98,37 @@ def test_compiled_tangential_relax_equals_its_formula():
     keep = np.setdiff1d(np.arange(len(v)), free)
     assert np.array_equal(got[keep], v[keep])
     assert ORDERS["U3"] == 3
+
+
+def test_laplacians_match_their_definitions():
+    """uniform_laplacian and cotan_laplacian (compiled) against the formulas, built densely face by
+    face on a noisy sphere with a zero-area face (three collinear points) and an unused vertex."""
+    v, f, _, _ = _sphere_cap()
+    m = len(v)
+    v = np.vstack([v, [[2.0, 0, 0], [3.0, 0, 0], [4.0, 0, 0], [9.0, 9.0, 9.0]]])  # the last: unused, an empty row
+    f = np.vstack([f, [[m, m + 1, m + 2]]])  # zero area: cotangents clipped, its rows zero (no area)
+    n = len(v)
+    A = np.zeros((n, n))
+    for a, b, c in f:
+        for x, y in ((a, b), (b, c), (c, a)):
+            A[x, y] = A[y, x] = 1.0
+    deg = A.sum(axis=1)
+    U = np.where(deg[:, None] > 0, A / np.maximum(deg, 1)[:, None], 0.0) - np.diag((deg > 0).astype(float))
+    np.testing.assert_allclose(uniform_laplacian(n, f).toarray(), U, atol=1e-15)
+    t = v[f]
+    dbl = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+    floor = dbl.max() * 1e-12
+    C = np.zeros((n, n))
+    M = np.zeros(n)
+    for i, tri in enumerate(f):
+        for k in range(3):
+            o, a, b = tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]
+            cot = np.clip((v[a] - v[o]) @ (v[b] - v[o]) / max(dbl[i], floor), -1e3, 1e3)
+            C[a, b] += cot / 2
+            C[b, a] += cot / 2
+            M[o] += dbl[i] / 6
+    inv = np.where(M > 0, 1 / np.where(M > 0, M, 1), 0.0)
+    ref = inv[:, None] * (C - np.diag(C.sum(axis=1)))
+    got = cotan_laplacian(v, f).toarray()
+    np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+    assert np.all(np.isfinite(got)) and not got[-1].any()

@@ -32,8 +32,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
 
-from ..topology import edge_table
-from .fair_kernels import dense_solve, power_system, relax_steps, ring_distance
+from .fair_kernels import cotan_csr, dense_solve, power_system, relax_steps, ring_distance, uniform_csr
 
 ORDERS = {"umbrella": 1, "U1": 1, "bilaplacian": 2, "U2": 2, "trilaplacian": 3, "U3": 3}
 WEIGHTINGS = ("uniform", "cotan")
@@ -42,61 +41,29 @@ WEIGHTINGS = ("uniform", "cotan")
 DENSE_MAX = 800
 
 
+def _faces(faces: NDArray[np.int64]) -> NDArray[np.int64]:
+    return np.ascontiguousarray(np.asarray(faces, dtype=np.int64).reshape(-1, 3))
+
+
+def _csr(arrays: tuple[NDArray, NDArray, NDArray], n: int) -> sp.csr_matrix:
+    indptr, indices, data = arrays
+    return sp.csr_matrix((data, indices, indptr), shape=(n, n))
+
+
 def uniform_laplacian(n_vertices: int, faces: NDArray[np.int64]) -> sp.csr_matrix:
-    """L = D^-1 A - I over the vertices; rows of vertices without edges are zero."""
-    n = int(n_vertices)
-    e = edge_table(np.asarray(faces, dtype=np.int64)).edges
-    r = np.concatenate([e[:, 0], e[:, 1]])
-    c = np.concatenate([e[:, 1], e[:, 0]])
-    deg = np.bincount(r, minlength=n)
-    has = np.flatnonzero(deg)
-    # built directly in CSR (rows in order, columns sorted): 1/deg off the diagonal, -1 on it
-    rows = np.concatenate([r, has])
-    cols = np.concatenate([c, has])
-    vals = np.concatenate([1.0 / deg[r], np.full(len(has), -1.0)])
-    order = np.lexsort((cols, rows))
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
-    return sp.csr_matrix((vals[order], cols[order], indptr), shape=(n, n))
+    """L = D^-1 A - I over the vertices (1/deg off the diagonal, -1 on it, columns sorted); rows of
+    vertices without edges are zero. Built compiled (fair_kernels.uniform_csr)."""
+    return _csr(uniform_csr(_faces(faces), int(n_vertices)), int(n_vertices))
 
 
 def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> sp.csr_matrix:
     """L = M^-1 (C - diag(C 1)): C_ab = (cot alpha + cot beta) / 2 over the faces at edge ab,
     M the barycentric area (a third of the incident faces' area). Cotangents are clipped to
-    [-1e3, 1e3] and areas floored so that degenerate input triangles cannot break the system."""
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
-    n = len(v)
-    t = v[f]
-    dbl = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)  # twice the area
-    floor = max(float(dbl.max()) * 1e-12, 1e-300) if len(dbl) else 1.0
-    rows, cols, vals = [], [], []
-    for k in range(3):  # the corner k is opposite the edge (k+1, k+2)
-        u = t[:, (k + 1) % 3] - t[:, k]
-        w = t[:, (k + 2) % 3] - t[:, k]
-        cot = np.clip(np.einsum("ij,ij->i", u, w) / np.maximum(dbl, floor), -1e3, 1e3)
-        a, b = f[:, (k + 1) % 3], f[:, (k + 2) % 3]
-        rows += [a, b]
-        cols += [b, a]
-        vals += [cot / 2, cot / 2]
-    # C summed per vertex pair, then M^-1 (C - diag(C 1)) built directly in CSR (columns sorted,
-    # exact zeros left out, as the sparse products would leave them)
-    key, inv_key = np.unique(np.concatenate(rows) * n + np.concatenate(cols), return_inverse=True)
-    cv = np.bincount(inv_key.ravel(), weights=np.concatenate(vals), minlength=len(key))
-    r, c = key // n, key % n
-    area = np.bincount(f.ravel(), weights=np.repeat(dbl / 6, 3), minlength=n)
-    has = area > 0
-    inv = np.divide(1.0, area, out=np.zeros(n), where=has)
-    diag = np.arange(n)
-    R = np.concatenate([r, diag])
-    K = np.concatenate([c, diag])
-    val = inv[R] * np.concatenate([cv, -np.bincount(r, weights=cv, minlength=n)])
-    keep = val != 0
-    R, K, val = R[keep], K[keep], val[keep]
-    order = np.lexsort((K, R))
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(R, minlength=n), out=indptr[1:])
-    return sp.csr_matrix((val[order], K[order], indptr), shape=(n, n))
+    [-1e3, 1e3] and areas floored so that degenerate input triangles cannot break the system.
+    Built compiled (fair_kernels.cotan_csr; columns sorted, exact zeros left out, as sparse
+    products would leave them)."""
+    v = np.ascontiguousarray(vertices, dtype=np.float64)
+    return _csr(cotan_csr(v, _faces(faces)), len(v))
 
 
 def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,

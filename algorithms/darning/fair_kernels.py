@@ -192,3 +192,131 @@ def relax_steps(v: np.ndarray, f: np.ndarray, free: np.ndarray, indptr: np.ndarr
         for q in range(m):
             for j in range(3):
                 v[free[q], j] += step * d[q, j]
+
+
+@numba.njit(cache=True)
+def _csr_with_diagonal(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, dvals: np.ndarray,
+                       n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """CSR arrays of the entries (rows, cols, vals) (sorted by row then column) plus one diagonal
+    entry dvals[r] per row, placed after the row's entries at columns <= r; exact zeros dropped."""
+    cnt = np.zeros(n + 1, dtype=np.int64)
+    m = rows.shape[0]
+    indices = np.empty(m + n, dtype=np.int64)
+    data = np.empty(m + n)
+    q = 0
+    p = 0
+    for r in range(n):
+        cnt[r] = q
+        while p < m and rows[p] == r and cols[p] <= r:
+            if vals[p] != 0.0:
+                indices[q] = cols[p]
+                data[q] = vals[p]
+                q += 1
+            p += 1
+        if dvals[r] != 0.0:
+            indices[q] = r
+            data[q] = dvals[r]
+            q += 1
+        while p < m and rows[p] == r:
+            if vals[p] != 0.0:
+                indices[q] = cols[p]
+                data[q] = vals[p]
+                q += 1
+            p += 1
+    cnt[n] = q
+    return cnt, indices[:q], data[:q]
+
+
+@numba.njit(cache=True)
+def uniform_csr(faces: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """fair.uniform_laplacian's CSR arrays (indptr, indices, data): L = D^-1 A - I, columns sorted,
+    rows of vertices without edges empty."""
+    nf = faces.shape[0]
+    und = np.empty(3 * nf, dtype=np.int64)
+    for i in range(nf):
+        for k in range(3):
+            a, b = faces[i, k], faces[i, (k + 1) % 3]
+            und[3 * i + k] = min(a, b) * n + max(a, b)
+    und = np.unique(und)
+    both = np.empty(2 * und.shape[0], dtype=np.int64)
+    for i in range(und.shape[0]):
+        a, b = und[i] // n, und[i] % n
+        both[2 * i] = a * n + b
+        both[2 * i + 1] = b * n + a
+    both = np.sort(both)
+    rows = both // n
+    cols = both % n
+    deg = np.zeros(n, dtype=np.int64)
+    for r in rows:
+        deg[r] += 1
+    vals = np.empty(rows.shape[0])
+    for i in range(rows.shape[0]):
+        vals[i] = 1.0 / deg[rows[i]]
+    dvals = np.zeros(n)
+    for r in range(n):
+        if deg[r] > 0:
+            dvals[r] = -1.0
+    return _csr_with_diagonal(rows, cols, vals, dvals, n)
+
+
+@numba.njit(cache=True)
+def cotan_csr(v: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """fair.cotan_laplacian's CSR arrays: L = M^-1 (C - diag(C 1)), the same sums in the same order
+    (C_ab over the faces in corner-major order, the row sums of C over sorted columns, M a third of
+    the incident faces' areas), exact zeros dropped."""
+    n = v.shape[0]
+    nf = faces.shape[0]
+    dbl = np.empty(nf)
+    for i in range(nf):
+        a, b, c = faces[i, 0], faces[i, 1], faces[i, 2]
+        u0, u1, u2 = v[b, 0] - v[a, 0], v[b, 1] - v[a, 1], v[b, 2] - v[a, 2]
+        w0, w1, w2 = v[c, 0] - v[a, 0], v[c, 1] - v[a, 1], v[c, 2] - v[a, 2]
+        x0, x1, x2 = u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0
+        dbl[i] = np.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    floor = max(dbl.max() * 1e-12, 1e-300) if nf else 1.0
+    keys = np.empty(6 * nf, dtype=np.int64)
+    vals = np.empty(6 * nf)
+    for k in range(3):  # the corner k is opposite the edge (k+1, k+2)
+        for i in range(nf):
+            o, a, b = faces[i, k], faces[i, (k + 1) % 3], faces[i, (k + 2) % 3]
+            u0, u1, u2 = v[a, 0] - v[o, 0], v[a, 1] - v[o, 1], v[a, 2] - v[o, 2]
+            w0, w1, w2 = v[b, 0] - v[o, 0], v[b, 1] - v[o, 1], v[b, 2] - v[o, 2]
+            cot = (u0 * w0 + u1 * w1 + u2 * w2) / max(dbl[i], floor)
+            cot = min(max(cot, -1e3), 1e3) / 2
+            keys[2 * k * nf + i] = a * n + b
+            keys[(2 * k + 1) * nf + i] = b * n + a
+            vals[2 * k * nf + i] = cot
+            vals[(2 * k + 1) * nf + i] = cot
+    order = np.argsort(keys, kind="mergesort")
+    uk = np.empty(6 * nf, dtype=np.int64)
+    cv = np.zeros(6 * nf)
+    m = -1
+    last = -1
+    for j in range(6 * nf):
+        key = keys[order[j]]
+        if key != last:
+            m += 1
+            uk[m] = key
+            last = key
+        cv[m] += vals[order[j]]
+    m += 1
+    rows = uk[:m] // n
+    cols = uk[:m] % n
+    dsum = np.zeros(n)
+    for j in range(m):
+        dsum[rows[j]] += cv[j]
+    area = np.zeros(n)
+    for i in range(nf):
+        for k in range(3):
+            area[faces[i, k]] += dbl[i] / 6
+    inv = np.zeros(n)
+    for r in range(n):
+        if area[r] > 0:
+            inv[r] = 1.0 / area[r]
+    off = np.empty(m)
+    for j in range(m):
+        off[j] = inv[rows[j]] * cv[j]
+    dvals = np.empty(n)
+    for r in range(n):
+        dvals[r] = inv[r] * -dsum[r]
+    return _csr_with_diagonal(rows, cols, off, dvals, n)
