@@ -113,25 +113,18 @@ def _fair_solve(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[np.int
     """Positions of the free vertices with L^k x = 0 there (lower powers near bare vertices)."""
     if len(free) <= DENSE_MAX:
         return _fair_solve_dense(L, out, free, k, bare, strict=strict)
-    powers = [L]
+    # the rows of L^j at the free vertices only: row f of L^j = (row f of L^(j-1)) L, the same sums
+    # as the whole product's row, without the rows of every fixed vertex
+    powers = [L[free]]
     for _ in range(k - 1):  # L^k: k = 3 also matches curvature across the border
         powers.append((powers[-1] @ L).tocsr())
-    rows = powers[-1][free]
+    rows = powers[-1]
     if k > 1 and bare is not None and len(bare):
         # the row of L^j at f reads L at the vertices up to j-1 rings from f: a free vertex j
         # rings from a bare vertex solves L^min(k, j) = 0
-        adj = (abs(L) + abs(L.T)) > 0
-        dist = np.full(len(out), k, dtype=np.int64)
-        front = np.zeros(len(out), dtype=bool)
-        front[np.asarray(bare, dtype=np.int64)] = True
-        seen = front.copy()
-        for j in range(1, k):  # sequential: ring after ring
-            front = (adj @ front.astype(np.float64) > 0) & ~seen
-            dist[front] = j
-            seen |= front
-        order = dist[free]
+        order = _bare_order(L, len(out), free, k, bare)
         if (order < k).any():
-            rows = _mixed_rows(powers, free, order)
+            rows = _mixed_rows(powers, order)
     rhs = -(rows[:, fixed] @ out[fixed])
     return _solve(rows[:, free].tocsr(), rhs, out[free], strict=strict)
 
@@ -145,11 +138,8 @@ def _fair_solve_dense(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[
     data = np.asarray(L.data, dtype=np.float64)
     free = np.asarray(free, dtype=np.int64)
     order = np.full(len(free), k, dtype=np.int64)
-    if k > 1 and bare is not None and len(bare):
-        # a free vertex j rings from a bare vertex solves L^min(k, j) = 0 (as in _fair_solve)
-        is_bare = np.zeros(len(out), dtype=bool)
-        is_bare[np.asarray(bare, dtype=np.int64)] = True
-        order = ring_distance(indptr, indices, data, is_bare, int(k))[free]
+    if k > 1 and bare is not None and len(bare):  # as in _fair_solve
+        order = _bare_order(L, len(out), free, k, bare)
     A, rhs = power_system(indptr, indices, data, free, order, np.ascontiguousarray(out, dtype=np.float64))
     x0 = out[free]
     zero = np.abs(A).sum(axis=1) == 0
@@ -186,13 +176,23 @@ def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64], 
         return splu((A + eps * sp.identity(A.shape[0])).tocsc()).solve(rhs + eps * x0)
 
 
-def _mixed_rows(powers: list[sp.csr_matrix], free: NDArray[np.int64], order: NDArray[np.int64]) -> sp.csr_matrix:
-    """Rows of L^order[i] at free[i], stacked in the order of ``free``."""
+def _bare_order(L: sp.csr_matrix, n: int, free: NDArray[np.int64], k: int,
+                bare: NDArray[np.int64]) -> NDArray[np.int64]:
+    """(len(free),) min(k, rings from the nearest bare vertex) over the edges of L (compiled BFS,
+    fair_kernels.ring_distance)."""
+    is_bare = np.zeros(n, dtype=bool)
+    is_bare[np.asarray(bare, dtype=np.int64)] = True
+    return ring_distance(np.asarray(L.indptr, dtype=np.int64), np.asarray(L.indices, dtype=np.int64),
+                         np.asarray(L.data, dtype=np.float64), is_bare, int(k))[free]
+
+
+def _mixed_rows(powers: list[sp.csr_matrix], order: NDArray[np.int64]) -> sp.csr_matrix:
+    """Row i of powers[order[i] - 1] for each i (powers[j - 1]: the rows of L^j at the free vertices)."""
     parts, where = [], []
     for j in range(1, len(powers) + 1):
         sel = np.flatnonzero(order == j)
         if len(sel):
-            parts.append(powers[j - 1][free[sel]])
+            parts.append(powers[j - 1][sel])
             where.append(sel)
     stacked = sp.vstack(parts).tocsr()
     pos = np.concatenate(where)
