@@ -97,22 +97,39 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
     is_free = np.zeros(len(v), dtype=bool)
     is_free[free] = True
     fixed = np.flatnonzero(~is_free)
+    f = _faces(faces)
+    small = len(free) <= DENSE_MAX  # the dense path reads L's CSR arrays, the sparse one a matrix
+
+    def laplacian(kind: str) -> sp.csr_matrix | tuple[NDArray, NDArray, NDArray]:
+        arrays = uniform_csr(f, len(v)) if kind == "uniform" else cotan_csr(out, f)
+        return arrays if small else _csr(arrays, len(v))
+
     for _ in range(1 if weights == "uniform" else iterations):  # sequential: cotan weights follow the positions
         if weights == "uniform":
-            out[free] = _fair_solve(uniform_laplacian(len(v), faces), out, free, fixed, ORDERS[operator], bare)
+            out[free] = _fair_solve(laplacian("uniform"), out, free, fixed, ORDERS[operator], bare)
             continue
         try:
-            out[free] = _fair_solve(cotan_laplacian(out, faces), out, free, fixed, ORDERS[operator], bare, strict=True)
+            out[free] = _fair_solve(laplacian("cotan"), out, free, fixed, ORDERS[operator], bare, strict=True)
         except RuntimeError:  # singular cotangent system (degenerate triangles): uniform weights
-            out[free] = _fair_solve(uniform_laplacian(len(v), faces), out, free, fixed, ORDERS[operator], bare)
+            out[free] = _fair_solve(laplacian("uniform"), out, free, fixed, ORDERS[operator], bare)
     return out
 
 
-def _fair_solve(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[np.int64], fixed: NDArray[np.int64],
-                k: int, bare: NDArray[np.int64] | None, *, strict: bool = False) -> NDArray[np.float64]:
-    """Positions of the free vertices with L^k x = 0 there (lower powers near bare vertices)."""
-    if len(free) <= DENSE_MAX:
-        return _fair_solve_dense(L, out, free, k, bare, strict=strict)
+def _arrays(L: sp.csr_matrix | tuple[NDArray, NDArray, NDArray]) -> tuple[NDArray, NDArray, NDArray]:
+    """(indptr, indices, data) of L (int64, int64, float64), as the kernels take them."""
+    if isinstance(L, tuple):
+        return L
+    return (np.asarray(L.indptr, dtype=np.int64), np.asarray(L.indices, dtype=np.int64),
+            np.asarray(L.data, dtype=np.float64))
+
+
+def _fair_solve(L: sp.csr_matrix | tuple[NDArray, NDArray, NDArray], out: NDArray[np.float64],
+                free: NDArray[np.int64], fixed: NDArray[np.int64], k: int, bare: NDArray[np.int64] | None, *,
+                strict: bool = False) -> NDArray[np.float64]:
+    """Positions of the free vertices with L^k x = 0 there (lower powers near bare vertices). L: the
+    matrix, or its CSR arrays (indptr, indices, data) for the dense path (at most DENSE_MAX free)."""
+    if isinstance(L, tuple) or len(free) <= DENSE_MAX:
+        return _fair_solve_dense(_arrays(L), out, free, k, bare, strict=strict)
     # the rows of L^j at the free vertices only: row f of L^j = (row f of L^(j-1)) L, the same sums
     # as the whole product's row, without the rows of every fixed vertex
     powers = [L[free]]
@@ -129,13 +146,12 @@ def _fair_solve(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[np.int
     return _solve(rows[:, free].tocsr(), rhs, out[free], strict=strict)
 
 
-def _fair_solve_dense(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[np.int64], k: int,
-                      bare: NDArray[np.int64] | None, *, strict: bool = False) -> NDArray[np.float64]:
+def _fair_solve_dense(L: tuple[NDArray, NDArray, NDArray], out: NDArray[np.float64], free: NDArray[np.int64],
+                      k: int, bare: NDArray[np.int64] | None, *, strict: bool = False) -> NDArray[np.float64]:
     """_fair_solve for a patch of at most DENSE_MAX free vertices: the same system, its rows built
-    compiled (fair_kernels.power_system) and solved with dense LU (no sparse-matrix call overhead)."""
-    indptr = np.asarray(L.indptr, dtype=np.int64)
-    indices = np.asarray(L.indices, dtype=np.int64)
-    data = np.asarray(L.data, dtype=np.float64)
+    compiled (fair_kernels.power_system) from L's CSR arrays and solved with dense LU (no
+    sparse-matrix call overhead)."""
+    indptr, indices, data = L
     free = np.asarray(free, dtype=np.int64)
     order = np.full(len(free), k, dtype=np.int64)
     if k > 1 and bare is not None and len(bare):  # as in _fair_solve
@@ -176,14 +192,13 @@ def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64], 
         return splu((A + eps * sp.identity(A.shape[0])).tocsc()).solve(rhs + eps * x0)
 
 
-def _bare_order(L: sp.csr_matrix, n: int, free: NDArray[np.int64], k: int,
+def _bare_order(L: sp.csr_matrix | tuple[NDArray, NDArray, NDArray], n: int, free: NDArray[np.int64], k: int,
                 bare: NDArray[np.int64]) -> NDArray[np.int64]:
     """(len(free),) min(k, rings from the nearest bare vertex) over the edges of L (compiled BFS,
     fair_kernels.ring_distance)."""
     is_bare = np.zeros(n, dtype=bool)
     is_bare[np.asarray(bare, dtype=np.int64)] = True
-    return ring_distance(np.asarray(L.indptr, dtype=np.int64), np.asarray(L.indices, dtype=np.int64),
-                         np.asarray(L.data, dtype=np.float64), is_bare, int(k))[free]
+    return ring_distance(*_arrays(L), is_bare, int(k))[free]
 
 
 def _mixed_rows(powers: list[sp.csr_matrix], order: NDArray[np.int64]) -> sp.csr_matrix:
@@ -212,10 +227,8 @@ def tangential_relax(vertices: NDArray[np.float64], faces: NDArray[np.int64], fr
     free = np.unique(np.asarray(free, dtype=np.int64))
     if not len(free) or not len(f):
         return v
-    L = uniform_laplacian(len(v), f)
+    f = _faces(f)
     # the steps run compiled (fair_kernels.relax_steps): a patch's few hundred vertices cost
-    # numpy call overhead, not arithmetic
-    relax_steps(v, np.ascontiguousarray(f), free, np.asarray(L.indptr, dtype=np.int64),
-                np.asarray(L.indices, dtype=np.int64), np.asarray(L.data, dtype=np.float64), int(iterations),
-                float(step))
+    # numpy call overhead, not arithmetic; L: the uniform Laplacian's CSR arrays
+    relax_steps(v, f, free, *uniform_csr(f, len(v)), int(iterations), float(step))
     return v
