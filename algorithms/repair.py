@@ -685,17 +685,18 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
 
 
 class _Incidence:
-    """Which faces touch which vertices, as the darning grows the surface: a sparse table of the
+    """Which faces touch which vertices, as the darning grows the surface: a table (CSR-like) of the
     faces there were when it was made (the input's), and the few patch faces added since (searched
     directly), so a hole's neighbourhood costs the size of the neighbourhood, not of the surface."""
 
     def __init__(self, faces: NDArray[np.int64], n_vertices: int) -> None:
-        import scipy.sparse as sp
-
         self.faces = np.asarray(faces, dtype=np.int64)
-        nf = len(self.faces)
-        self.table = sp.csr_matrix((np.ones(3 * nf, dtype=np.int8), (self.faces.ravel(), np.repeat(np.arange(nf), 3))),
-                                   shape=(n_vertices, nf))
+        # the table: the faces at vertex v are face_of[start[v]:start[v + 1]] (ascending)
+        flat = self.faces.ravel()
+        order = np.argsort(flat, kind="stable")
+        self.face_of = order // 3
+        self.start = np.zeros(n_vertices + 1, dtype=np.int64)
+        np.cumsum(np.bincount(flat, minlength=n_vertices), out=self.start[1:])
         self.added: list[NDArray[np.int64]] = []
 
     def neighbourhood(self, V: NDArray[np.float64], poly: tuple[int, ...], *,
@@ -708,12 +709,16 @@ class _Incidence:
         extra = np.vstack(self.added) if self.added else np.zeros((0, 3), dtype=np.int64)
         near = np.zeros(len(V), dtype=bool)
         near[list(poly)] = True
-        rows = self.table.shape[0]
+        rows = len(self.start) - 1
         f0 = np.zeros(0, dtype=np.int64)
         fx = np.zeros(len(extra), dtype=bool)
         for _ in range(rings):  # each ring: the faces touching the vertices reached so far
             v = np.flatnonzero(near[:rows])
-            f0 = np.unique(self.table[v].indices)
+            lo, hi = self.start[v], self.start[v + 1]
+            cnt = hi - lo
+            # every table slot of those vertices: lo repeated per slot, plus the offset within it
+            slot = np.repeat(lo - np.cumsum(cnt) + cnt, cnt) + np.arange(int(cnt.sum()))
+            f0 = np.unique(self.face_of[slot])
             fx = near[extra].any(axis=1)
             near[self.faces[f0].ravel()] = True
             near[extra[fx].ravel()] = True

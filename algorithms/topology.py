@@ -103,8 +103,15 @@ def boundary_loops(faces: NDArray[np.int64]) -> list[NDArray[np.int64]]:
     bhe = boundary_halfedges(faces)
     if not len(bhe):
         return []
-    # half-edge lookup by key a*V+b for the fan walk
     nv = int(faces.max()) + 1
+    if np.bincount(bhe[:, 0], minlength=nv).max() == 1 and np.bincount(bhe[:, 1], minlength=nv).max() == 1:
+        return _simple_loops(bhe, nv)  # one boundary edge leaves and one enters each: disjoint cycles
+    return _walk_loops(faces, bhe, nv)
+
+
+def _walk_loops(faces: NDArray[np.int64], bhe: NDArray[np.int64], nv: int) -> list[NDArray[np.int64]]:
+    """boundary_loops' general walk (turning around vertices where several loops touch)."""
+    # half-edge lookup by key a*V+b for the fan walk
     he = halfedges(faces)
     keys = he[:, 0] * nv + he[:, 1]
     korder = np.argsort(keys)
@@ -154,6 +161,31 @@ def boundary_loops(faces: NDArray[np.int64]) -> list[NDArray[np.int64]]:
                 break
             used.add((cur, nxt))
             prev, cur = cur, nxt
+        loops.append(np.array(loop, dtype=np.int64))
+    loops.sort(key=lambda lp: (-len(lp), int(lp.min())))
+    return loops
+
+
+def _simple_loops(bhe: NDArray[np.int64], nv: int) -> list[NDArray[np.int64]]:
+    """boundary_loops where each boundary vertex has one outgoing and one incoming boundary
+    half-edge (the loops are disjoint cycles): each loop starts at the first of its half-edges in
+    ``bhe``'s order and follows the successors (boundary_loops' walk, without the fan turns it
+    never needs here)."""
+    nxt = np.full(nv, -1, dtype=np.int64)
+    nxt[bhe[:, 0]] = bhe[:, 1]
+    succ = nxt.tolist()
+    seen = bytearray(nv)
+    loops: list[NDArray[np.int64]] = []
+    for a in bhe[:, 0].tolist():
+        if seen[a]:
+            continue
+        loop = [a]
+        seen[a] = 1
+        cur = succ[a]
+        while cur != a:
+            loop.append(cur)
+            seen[cur] = 1
+            cur = succ[cur]
         loops.append(np.array(loop, dtype=np.int64))
     loops.sort(key=lambda lp: (-len(lp), int(lp.min())))
     return loops

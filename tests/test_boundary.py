@@ -58,3 +58,24 @@ def test_closed_sphere_and_torus_genus():
     assert s.class_guess == "closed" and s.islands[0].euler == 2 and s.islands[0].genus == 0
     t = summarize(Icadm(torus()))
     assert t.islands[0].euler == 0 and t.islands[0].genus == 1
+
+
+def test_simple_loop_walk_equals_the_general_walk():
+    """boundary_loops' successor walk (every boundary vertex on one loop once) gives the loops of
+    the general fan walk, same start vertices, same order, on cut demo shapes with many holes."""
+    from algorithms import cases
+    from algorithms.topology import _simple_loops, _walk_loops, boundary_halfedges
+
+    rng = np.random.default_rng(2)
+    for mesh in (cases.icosphere(4), cases.torus()):
+        c = cases.face_centroids(mesh)
+        d = mesh.bbox_diagonal()
+        holes = np.zeros(len(c), dtype=bool)
+        for vi in rng.choice(mesh.n_vertices, 12, replace=False):
+            holes |= np.linalg.norm(c - mesh.vertices[vi], axis=1) < 0.05 * d
+        f = np.asarray(mesh.faces)[~holes]
+        bhe = boundary_halfedges(f)
+        nv = int(f.max()) + 1
+        fast, walk = _simple_loops(bhe, nv), _walk_loops(f, bhe, nv)
+        assert len(walk) > 3
+        assert len(fast) == len(walk) and all(np.array_equal(a, b) for a, b in zip(fast, walk))

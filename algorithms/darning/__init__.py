@@ -118,6 +118,8 @@ def pinches(vertices: NDArray[np.float64], loop: NDArray[np.int64]) -> NDArray[n
     lp = np.asarray(loop, dtype=np.int64)
     pts = np.asarray(vertices, dtype=np.float64)[lp]
     tol = 1e-12 * float(np.ptp(pts, axis=0).max(initial=0.0))
+    if len(pts) > 1 and np.all(np.diff(np.sort(pts[:, 0])) > tol):
+        return np.zeros((0, 2), dtype=np.int64)  # no two points within tol even in x alone: no pair
     close = cKDTree(pts).query_pairs(tol, output_type="ndarray") if len(pts) > 1 else np.zeros((0, 2), np.int64)
     close = close[lp[close[:, 0]] != lp[close[:, 1]]]
     if not len(close):

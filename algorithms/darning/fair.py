@@ -10,7 +10,9 @@ solve U = 0 with every other vertex fixed:
 
     (L^k)[free, free] x_free = -(L^k)[free, fixed] x_fixed,     k = 1 (U1) or 2 (U2),
 
-one sparse solve for the three coordinates (scipy.sparse.linalg.splu). The rows of L^2 at a free
+one sparse solve for the three coordinates (scipy.sparse.linalg.splu); a system of at most
+``DENSE_MAX`` free vertices (a hole's patch) is assembled compiled and solved with dense LU instead
+(fair_kernels.py: the same system; per-call overhead dominated the sparse route there). The rows of L^2 at a free
 vertex reach two rings out, so the hole border and one ring of fixed vertices beyond it act as
 the boundary condition (positions and tangents). The spec's iteration "solve, move, repeat"
 converges to this same fixed point; with uniform weights it is reached in one solve.
@@ -30,67 +32,38 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
 
-from ..topology import edge_table
+from .fair_kernels import cotan_csr, dense_solve, power_system, relax_steps, ring_distance, uniform_csr
 
 ORDERS = {"umbrella": 1, "U1": 1, "bilaplacian": 2, "U2": 2, "trilaplacian": 3, "U3": 3}
 WEIGHTINGS = ("uniform", "cotan")
+# **(choice)** systems of at most this many free vertices (a hole's patch) are assembled compiled and
+# solved with dense LU (_fair_solve_dense); larger ones (a whole mesh's new vertices) stay sparse
+DENSE_MAX = 800
+
+
+def _faces(faces: NDArray[np.int64]) -> NDArray[np.int64]:
+    return np.ascontiguousarray(np.asarray(faces, dtype=np.int64).reshape(-1, 3))
+
+
+def _csr(arrays: tuple[NDArray, NDArray, NDArray], n: int) -> sp.csr_matrix:
+    indptr, indices, data = arrays
+    return sp.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
 def uniform_laplacian(n_vertices: int, faces: NDArray[np.int64]) -> sp.csr_matrix:
-    """L = D^-1 A - I over the vertices; rows of vertices without edges are zero."""
-    n = int(n_vertices)
-    e = edge_table(np.asarray(faces, dtype=np.int64)).edges
-    r = np.concatenate([e[:, 0], e[:, 1]])
-    c = np.concatenate([e[:, 1], e[:, 0]])
-    deg = np.bincount(r, minlength=n)
-    has = np.flatnonzero(deg)
-    # built directly in CSR (rows in order, columns sorted): 1/deg off the diagonal, -1 on it
-    rows = np.concatenate([r, has])
-    cols = np.concatenate([c, has])
-    vals = np.concatenate([1.0 / deg[r], np.full(len(has), -1.0)])
-    order = np.lexsort((cols, rows))
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
-    return sp.csr_matrix((vals[order], cols[order], indptr), shape=(n, n))
+    """L = D^-1 A - I over the vertices (1/deg off the diagonal, -1 on it, columns sorted); rows of
+    vertices without edges are zero. Built compiled (fair_kernels.uniform_csr)."""
+    return _csr(uniform_csr(_faces(faces), int(n_vertices)), int(n_vertices))
 
 
 def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> sp.csr_matrix:
     """L = M^-1 (C - diag(C 1)): C_ab = (cot alpha + cot beta) / 2 over the faces at edge ab,
     M the barycentric area (a third of the incident faces' area). Cotangents are clipped to
-    [-1e3, 1e3] and areas floored so that degenerate input triangles cannot break the system."""
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
-    n = len(v)
-    t = v[f]
-    dbl = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)  # twice the area
-    floor = max(float(dbl.max()) * 1e-12, 1e-300) if len(dbl) else 1.0
-    rows, cols, vals = [], [], []
-    for k in range(3):  # the corner k is opposite the edge (k+1, k+2)
-        u = t[:, (k + 1) % 3] - t[:, k]
-        w = t[:, (k + 2) % 3] - t[:, k]
-        cot = np.clip(np.einsum("ij,ij->i", u, w) / np.maximum(dbl, floor), -1e3, 1e3)
-        a, b = f[:, (k + 1) % 3], f[:, (k + 2) % 3]
-        rows += [a, b]
-        cols += [b, a]
-        vals += [cot / 2, cot / 2]
-    # C summed per vertex pair, then M^-1 (C - diag(C 1)) built directly in CSR (columns sorted,
-    # exact zeros left out, as the sparse products would leave them)
-    key, inv_key = np.unique(np.concatenate(rows) * n + np.concatenate(cols), return_inverse=True)
-    cv = np.bincount(inv_key.ravel(), weights=np.concatenate(vals), minlength=len(key))
-    r, c = key // n, key % n
-    area = np.bincount(f.ravel(), weights=np.repeat(dbl / 6, 3), minlength=n)
-    has = area > 0
-    inv = np.divide(1.0, area, out=np.zeros(n), where=has)
-    diag = np.arange(n)
-    R = np.concatenate([r, diag])
-    K = np.concatenate([c, diag])
-    val = inv[R] * np.concatenate([cv, -np.bincount(r, weights=cv, minlength=n)])
-    keep = val != 0
-    R, K, val = R[keep], K[keep], val[keep]
-    order = np.lexsort((K, R))
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(R, minlength=n), out=indptr[1:])
-    return sp.csr_matrix((val[order], K[order], indptr), shape=(n, n))
+    [-1e3, 1e3] and areas floored so that degenerate input triangles cannot break the system.
+    Built compiled (fair_kernels.cotan_csr; columns sorted, exact zeros left out, as sparse
+    products would leave them)."""
+    v = np.ascontiguousarray(vertices, dtype=np.float64)
+    return _csr(cotan_csr(v, _faces(faces)), len(v))
 
 
 def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
@@ -124,41 +97,78 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
     is_free = np.zeros(len(v), dtype=bool)
     is_free[free] = True
     fixed = np.flatnonzero(~is_free)
+    f = _faces(faces)
+    small = len(free) <= DENSE_MAX  # the dense path reads L's CSR arrays, the sparse one a matrix
+
+    def laplacian(kind: str) -> sp.csr_matrix | tuple[NDArray, NDArray, NDArray]:
+        arrays = uniform_csr(f, len(v)) if kind == "uniform" else cotan_csr(out, f)
+        return arrays if small else _csr(arrays, len(v))
+
     for _ in range(1 if weights == "uniform" else iterations):  # sequential: cotan weights follow the positions
         if weights == "uniform":
-            out[free] = _fair_solve(uniform_laplacian(len(v), faces), out, free, fixed, ORDERS[operator], bare)
+            out[free] = _fair_solve(laplacian("uniform"), out, free, fixed, ORDERS[operator], bare)
             continue
         try:
-            out[free] = _fair_solve(cotan_laplacian(out, faces), out, free, fixed, ORDERS[operator], bare, strict=True)
+            out[free] = _fair_solve(laplacian("cotan"), out, free, fixed, ORDERS[operator], bare, strict=True)
         except RuntimeError:  # singular cotangent system (degenerate triangles): uniform weights
-            out[free] = _fair_solve(uniform_laplacian(len(v), faces), out, free, fixed, ORDERS[operator], bare)
+            out[free] = _fair_solve(laplacian("uniform"), out, free, fixed, ORDERS[operator], bare)
     return out
 
 
-def _fair_solve(L: sp.csr_matrix, out: NDArray[np.float64], free: NDArray[np.int64], fixed: NDArray[np.int64],
-                k: int, bare: NDArray[np.int64] | None, *, strict: bool = False) -> NDArray[np.float64]:
-    """Positions of the free vertices with L^k x = 0 there (lower powers near bare vertices)."""
-    powers = [L]
+def _arrays(L: sp.csr_matrix | tuple[NDArray, NDArray, NDArray]) -> tuple[NDArray, NDArray, NDArray]:
+    """(indptr, indices, data) of L (int64, int64, float64), as the kernels take them."""
+    if isinstance(L, tuple):
+        return L
+    return (np.asarray(L.indptr, dtype=np.int64), np.asarray(L.indices, dtype=np.int64),
+            np.asarray(L.data, dtype=np.float64))
+
+
+def _fair_solve(L: sp.csr_matrix | tuple[NDArray, NDArray, NDArray], out: NDArray[np.float64],
+                free: NDArray[np.int64], fixed: NDArray[np.int64], k: int, bare: NDArray[np.int64] | None, *,
+                strict: bool = False) -> NDArray[np.float64]:
+    """Positions of the free vertices with L^k x = 0 there (lower powers near bare vertices). L: the
+    matrix, or its CSR arrays (indptr, indices, data) for the dense path (at most DENSE_MAX free)."""
+    if isinstance(L, tuple) or len(free) <= DENSE_MAX:
+        return _fair_solve_dense(_arrays(L), out, free, k, bare, strict=strict)
+    # the rows of L^j at the free vertices only: row f of L^j = (row f of L^(j-1)) L, the same sums
+    # as the whole product's row, without the rows of every fixed vertex
+    powers = [L[free]]
     for _ in range(k - 1):  # L^k: k = 3 also matches curvature across the border
         powers.append((powers[-1] @ L).tocsr())
-    rows = powers[-1][free]
+    rows = powers[-1]
     if k > 1 and bare is not None and len(bare):
         # the row of L^j at f reads L at the vertices up to j-1 rings from f: a free vertex j
         # rings from a bare vertex solves L^min(k, j) = 0
-        adj = (abs(L) + abs(L.T)) > 0
-        dist = np.full(len(out), k, dtype=np.int64)
-        front = np.zeros(len(out), dtype=bool)
-        front[np.asarray(bare, dtype=np.int64)] = True
-        seen = front.copy()
-        for j in range(1, k):  # sequential: ring after ring
-            front = (adj @ front.astype(np.float64) > 0) & ~seen
-            dist[front] = j
-            seen |= front
-        order = dist[free]
+        order = _bare_order(L, len(out), free, k, bare)
         if (order < k).any():
-            rows = _mixed_rows(powers, free, order)
+            rows = _mixed_rows(powers, order)
     rhs = -(rows[:, fixed] @ out[fixed])
     return _solve(rows[:, free].tocsr(), rhs, out[free], strict=strict)
+
+
+def _fair_solve_dense(L: tuple[NDArray, NDArray, NDArray], out: NDArray[np.float64], free: NDArray[np.int64],
+                      k: int, bare: NDArray[np.int64] | None, *, strict: bool = False) -> NDArray[np.float64]:
+    """_fair_solve for a patch of at most DENSE_MAX free vertices: the same system, its rows built
+    compiled (fair_kernels.power_system) from L's CSR arrays and solved with dense LU (no
+    sparse-matrix call overhead)."""
+    indptr, indices, data = L
+    free = np.asarray(free, dtype=np.int64)
+    order = np.full(len(free), k, dtype=np.int64)
+    if k > 1 and bare is not None and len(bare):  # as in _fair_solve
+        order = _bare_order(L, len(out), free, k, bare)
+    A, rhs = power_system(indptr, indices, data, free, order, np.ascontiguousarray(out, dtype=np.float64))
+    x0 = out[free]
+    zero = np.abs(A).sum(axis=1) == 0
+    if zero.any():  # a free vertex whose row vanished keeps its position (as in _solve)
+        A[zero, zero] = 1.0
+        rhs = np.where(zero[:, None], x0, rhs)
+    x, ok = dense_solve(A, rhs)
+    if ok and np.all(np.isfinite(x)):
+        return x
+    if strict:  # exactly singular
+        raise RuntimeError("singular fairing system")
+    eps = 1e-9 * float(np.abs(A).max())
+    return dense_solve(A + eps * np.eye(len(A)), rhs + eps * x0)[0]
 
 
 def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64], *,
@@ -182,13 +192,22 @@ def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64], 
         return splu((A + eps * sp.identity(A.shape[0])).tocsc()).solve(rhs + eps * x0)
 
 
-def _mixed_rows(powers: list[sp.csr_matrix], free: NDArray[np.int64], order: NDArray[np.int64]) -> sp.csr_matrix:
-    """Rows of L^order[i] at free[i], stacked in the order of ``free``."""
+def _bare_order(L: sp.csr_matrix | tuple[NDArray, NDArray, NDArray], n: int, free: NDArray[np.int64], k: int,
+                bare: NDArray[np.int64]) -> NDArray[np.int64]:
+    """(len(free),) min(k, rings from the nearest bare vertex) over the edges of L (compiled BFS,
+    fair_kernels.ring_distance)."""
+    is_bare = np.zeros(n, dtype=bool)
+    is_bare[np.asarray(bare, dtype=np.int64)] = True
+    return ring_distance(*_arrays(L), is_bare, int(k))[free]
+
+
+def _mixed_rows(powers: list[sp.csr_matrix], order: NDArray[np.int64]) -> sp.csr_matrix:
+    """Row i of powers[order[i] - 1] for each i (powers[j - 1]: the rows of L^j at the free vertices)."""
     parts, where = [], []
     for j in range(1, len(powers) + 1):
         sel = np.flatnonzero(order == j)
         if len(sel):
-            parts.append(powers[j - 1][free[sel]])
+            parts.append(powers[j - 1][sel])
             where.append(sel)
     stacked = sp.vstack(parts).tocsr()
     pos = np.concatenate(where)
@@ -208,15 +227,8 @@ def tangential_relax(vertices: NDArray[np.float64], faces: NDArray[np.int64], fr
     free = np.unique(np.asarray(free, dtype=np.int64))
     if not len(free) or not len(f):
         return v
-    L = uniform_laplacian(len(v), f)[free]
-    cols = f.T.ravel()
-    for _ in range(iterations):  # sequential: each step starts from the previous positions
-        t = v[f]
-        fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-        # vertex normals: the face normals summed per corner column (the order np.add.at would use)
-        n = np.stack([np.bincount(cols, weights=np.tile(fn[:, j], 3), minlength=len(v))[free] for j in range(3)], 1)
-        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-        d = L @ v  # centroid of the neighbours minus the vertex
-        d -= np.einsum("ij,ij->i", d, n)[:, None] * n
-        v[free] += step * d
+    f = _faces(f)
+    # the steps run compiled (fair_kernels.relax_steps): a patch's few hundred vertices cost
+    # numpy call overhead, not arithmetic; L: the uniform Laplacian's CSR arrays
+    relax_steps(v, f, free, *uniform_csr(f, len(v)), int(iterations), float(step))
     return v

@@ -28,6 +28,7 @@ from ..topology import edge_table, halfedges
 from .flips import edge_keys_among, flip_passes
 from .refine_kernels import corner_angles as _corner_angles
 from .refine_kernels import smooth_bad, unchangeable
+from .split_kernels import centroid_splits, obtuse_edges
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,7 +118,7 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
     """
     if not density > 0:
         raise ValueError(f"density must be > 0, got {density}")
-    v = np.asarray(vertices, dtype=np.float64)
+    v = np.ascontiguousarray(vertices, dtype=np.float64)
     f = np.array(patch, dtype=np.int64, copy=True).reshape(-1, 3)
     lab = np.arange(len(f)) if label is None else np.array(label, dtype=np.int64, copy=True)
     lv = edge_scale(v, fixed_faces, len(v)) if scale is None else np.array(scale, dtype=np.float64, copy=True)
@@ -140,11 +141,7 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
     while rounds < max_rounds:  # sequential: split, relax, repeat (frep.md §4)
         rounds += 1
         P = np.vstack(pts) if len(pts) > 1 else pts[0]
-        t = P[f]
-        vc = t.mean(axis=1)
-        lc = lv[f].mean(axis=1)  # l(v_c)
-        dist = density * np.linalg.norm(vc[:, None, :] - t, axis=2)
-        split = np.all(dist > lc[:, None], axis=1) & np.all(dist > lv[f], axis=1)
+        split, vc, lc = centroid_splits(P, f, lv, float(density))  # the test above, l(v_c) = lc
         if lens is not None and split.any():
             split[split] = ~_encroached(P, _stuck_edges(P, f, fixed_faces, lv, density), vc[split], lens=lens)
         if len(f) + 2 * int(split.sum()) > max_faces:
@@ -204,22 +201,14 @@ def _split_obtuse(p: NDArray[np.float64], f: NDArray[np.int64], lab: NDArray[np.
     """Split the patch-interior edges facing an angle above ``limit`` (radians) at their midpoints;
     each face takes part in at most one split; a midpoint in the diametral lens of a ``stuck`` edge
     (S, 2) is not used (refine's ``lens``). Returns (faces, labels, new points, their l)."""
-    he = halfedges(f)
-    key = he[:, 0] * len(p) + he[:, 1]
-    order = np.argsort(key)
-    skey = key[order]
-    twin = he[:, 1] * len(p) + he[:, 0]
-    pos = np.minimum(np.searchsorted(skey, twin), len(key) - 1)
-    h1 = np.flatnonzero((skey[pos] == twin) & (he[:, 0] < he[:, 1]))
-    h2 = order[pos[h1]]
-    a, b = he[h1, 0], he[h1, 1]
+    # the interior edges facing an angle above the limit and longer than half their ends' scale
+    # (halving them cannot go on for ever: a folded patch, whose flips are refused, would otherwise
+    # split its obtuse edges without end), compiled: split_kernels.obtuse_edges
+    h1, h2, worst = obtuse_edges(p, f, lv, float(limit))
+    a, b = f[h1 // 3, h1 % 3], f[h1 // 3, (h1 % 3 + 1) % 3]
     c = f[h1 // 3, (h1 % 3 + 2) % 3]
     d = f[h2 // 3, (h2 % 3 + 2) % 3]
-    worst = np.maximum(_angle_at(p, c, a, b), _angle_at(p, d, a, b))
-    # only edges longer than half their ends' scale: halving them cannot go on for ever (a folded
-    # patch, whose flips are refused, would otherwise split its obtuse edges without end)
-    long_ = np.linalg.norm(p[a] - p[b], axis=1) > 0.5 * (lv[a] + lv[b]) / 2
-    cand = np.flatnonzero((worst > limit) & long_)
+    cand = np.arange(len(h1))
     if stuck is not None and len(cand):
         cand = cand[~_encroached(p, stuck, (p[a[cand]] + p[b[cand]]) / 2, lens=lens)]
     empty = np.zeros((0, 3))
