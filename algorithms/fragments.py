@@ -59,10 +59,11 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
     polygons: hole polygons (surface on their left). normals: vertex normals of the working
     vertex array (the model's vertices first). A fragment is attached when it is an oriented disk
     (one boundary loop, Euler characteristic 1) whose vertices used by the kept surface lie on its
-    loop and each occur exactly once in the polygons, all in one polygon; others stay set aside
-    (noted). Hanging at one vertex, its loop is walked into the polygon (the pipeline bridges the
-    pinch, ``fragment_bridge``); at several (a triangle left across a hole by a cut, its corners on
-    the hole's border), it cuts the polygon into the holes around it (``_walk_around``).
+    loop and each occur exactly once in the polygons; others stay set aside (noted). Hanging at one
+    vertex, its loop is walked into the polygon (the pipeline bridges the pinch,
+    ``fragment_bridge``); at several (a triangle left across a hole by a cut, its corners on the
+    hole's border), it cuts the polygon into the holes around it, and touching several holes it
+    joins them (``_walk_around``).
     """
     polys = [tuple(int(x) for x in p) for p in polygons]
     src = list(range(len(polys)))  # the input polygon each polygon comes from
@@ -99,8 +100,9 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
         loop = [int(x) for x in boundary_loops(faces)[0]]
         where = occurrences()
         spots = [where.get(a, []) for a in attach]
-        if not attach or any(len(w) != 1 for w in spots) or len({w[0][0] for w in spots}) != 1 or taken & set(attach):
-            notes.append(f"{label} left aside: not hanging at vertices of one hole, each passed once")
+        holes = sorted({w[0][0] for w in spots if len(w) == 1})
+        if not attach or any(len(w) != 1 for w in spots) or taken & set(attach) or len(holes) > len(attach):
+            notes.append(f"{label} left aside: not hanging at hole vertices each passed once")
             continue
         if any(a not in loop for a in attach):
             notes.append(f"{label} left aside: an attachment vertex is inside it")
@@ -121,12 +123,17 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
             i = polys[k].index(m)
             polys[k] = polys[k][:i + 1] + tuple(walk) + (m,) + polys[k][i + 1:]
             at.append(m)
-        else:  # hanging at several vertices of the hole: the fragment cuts the hole into pieces
+        else:  # hanging at several hole vertices: the fragment cuts its hole into pieces, or joins
+            # the holes it touches (a piece of surface spanning between them, like a wide bridge)
             walk = [x for x in loop if x not in to_hole]
-            pieces = _walk_around(polys[k], [to_hole.get(x, x) for x in loop], set(to_hole.values()))
-            polys[k] = pieces[0] if pieces else ()  # () : the fragment closed the hole (dropped below)
-            polys += pieces[1:]
-            src += [src[k]] * (len(pieces) - 1)
+            pieces = _walk_around([polys[h] for h in holes], [to_hole.get(x, x) for x in loop], set(to_hole.values()))
+            for h in holes:
+                polys[h] = ()  # () : replaced (or closed by the fragment), dropped below
+            polys += pieces
+            src += [src[k]] * len(pieces)
+            # joining holes at single vertices the walk passes them twice: bridged like a single
+            # attachment's pinch (fragment_bridge)
+            at += [m for m in to_hole.values() if any(q.count(m) > 1 for q in pieces)]
         out_f.append(np.vectorize(lambda x: to_hole.get(int(x), int(x)), otypes=[np.int64])(faces))
         in_ids += fids
         flips += [flip] * len(fids)
@@ -153,18 +160,18 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
     return Attached(pieces, faces_out, tuple(in_ids), tuple(flips), nrm_of, tuple(notes), tuple(source), tuple(at))
 
 
-def _walk_around(polygon: tuple[int, ...], loop: list[int], attach: set[int]) -> list[tuple[int, ...]]:
+def _walk_around(polygons: list[tuple[int, ...]], loop: list[int], attach: set[int]) -> list[tuple[int, ...]]:
     """The holes left when a fragment whose boundary ``loop`` (positive, attachment vertices already
-    numbered as the polygon's) touches ``polygon`` at the vertices ``attach``: the boundary of
+    numbered as the polygons') touches ``polygons`` at the vertices ``attach``: the boundary of
     surface + fragment, walked with both on the left. At an attachment vertex a walk arriving along
     the polygon leaves along the fragment's loop and one arriving along the loop leaves along the
     polygon (the rule of a single attachment vertex, applied at each). Two-vertex walks (a hole edge
     and a fragment edge between the same two vertices: they become one inner edge) are dropped."""
-    nxt = {"p": {a: b for a, b in zip(polygon, polygon[1:] + polygon[:1])},
+    nxt = {"p": {a: b for p in polygons for a, b in zip(p, p[1:] + p[:1])},
            "f": {a: b for a, b in zip(loop, loop[1:] + loop[:1])}}
     done: set[tuple[str, int]] = set()
     out: list[tuple[int, ...]] = []
-    for dart in [("p", v) for v in polygon] + [("f", v) for v in loop]:
+    for dart in [("p", v) for p in polygons for v in p] + [("f", v) for v in loop]:
         walk: list[int] = []
         while dart not in done:
             done.add(dart)

@@ -27,10 +27,12 @@ def _torus_case():
 def test_walk_around_splits_a_square_hole():
     # a square hole 0-1-2-3 and a triangle fragment hanging at 0 and 2, its third vertex 9 towards 1
     # (loop 2 -> 9 -> 0): the holes left are 0-1-2-9 and the triangle 2-3-0 beyond its edge 0 -> 2
-    assert _walk_around((0, 1, 2, 3), [2, 9, 0], {0, 2}) == [(0, 1, 2, 9), (2, 3, 0)]
-    assert _walk_around((0, 1, 2, 3), [0, 9, 2], {0, 2}) == [(0, 1, 2), (2, 3, 0, 9)]  # 9 towards 3
+    assert _walk_around([(0, 1, 2, 3)], [2, 9, 0], {0, 2}) == [(0, 1, 2, 9), (2, 3, 0)]
+    assert _walk_around([(0, 1, 2, 3)], [0, 9, 2], {0, 2}) == [(0, 1, 2), (2, 3, 0, 9)]  # 9 towards 3
     # a fragment edge 1 -> 0 against the hole edge 0 -> 1: the two become one inner edge, one hole left
-    assert _walk_around((0, 1, 2, 3), [1, 0, 9], {0, 1}) == [(1, 2, 3, 0, 9)]
+    assert _walk_around([(0, 1, 2, 3)], [1, 0, 9], {0, 1}) == [(1, 2, 3, 0, 9)]
+    # a fragment touching two holes (0-1-2 and 5-6-7) at 0 and 5 joins them into one walk through it
+    assert _walk_around([(0, 1, 2), (5, 6, 7)], [0, 9, 5, 8], {0, 5}) == [(0, 1, 2, 0, 9, 5, 6, 7, 5, 8)]
 
 
 def test_fragment_touching_two_border_vertices_is_kept():
