@@ -33,3 +33,22 @@ def test_slab_across_the_part_gives_a_manifold_surface():
     t = topology(res.mesh.faces)
     assert t.watertight and t.oriented and t.components == 1 and t.genus == 9
     assert_input_kept(model, res.mesh)
+
+
+def test_fragment_between_two_holes_is_kept():
+    """Five balls cut the part so that a two-face fragment touches two holes (and two one-face
+    fragments hang at its corners): it joins the two holes into one walk; every input face stays."""
+    part = Mesh(*load_raw(data_file("featuretype.stl")))
+    c = face_centroids(part)
+    remove = np.zeros(part.n_faces, dtype=bool)
+    for v, r in ((483, 0.2925902196708333), (273, 0.5972613332249297), (267, 0.1744938932985518),
+                 (233, 0.4367017851356098), (439, 0.3365696591901824)):
+        remove |= np.linalg.norm(c - part.vertices[v], axis=1) < r
+    case = cut(part, remove, name="featuretype five balls", description="")
+    model = normalize(case.incomplete.vertices, case.incomplete.faces)
+    assert sum(s.reason.startswith("fragment") for s in model.set_aside) == 4
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert res.attached is not None and len(res.attached.input_faces) == 4
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 1 and t.genus == 9
+    assert_input_kept(model, res.mesh)
