@@ -608,13 +608,24 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
 
         # the fairing placed the vertices on a smooth surface but unevenly: even them out along it
         movable = np.setdiff1d(np.arange(n_input, len(V)), keep_still)
-        fit = None
+        fit, smooth = None, []  # the holes the RBF judged (darning/hole_rbf.py)
         if params.fit == "apss" and len(movable):  # thin parts: the fairing spans them flat; the APSS follows them
             fit = _Surroundings(V, F, n_input, work.normals[0], spacing)
             if params.field.use_free_points and len(model.free_points):  # full mode: samples of the missing surface
                 fit.add(*free_samples(model.free_points, V, F, fit.points, movable, spacing=spacing))
+            faired = V
             V, moved = fit.project(V, movable)
             timings_note["fairing"] += " + APSS"
+            # holes where the APSS moved a vertex by more than an edge (it disagreed with the fairing): the
+            # median of fairing, APSS and the RBF of the hole's rings (darning/hole_rbf.py)
+            from .darning.hole_rbf import median_move, smooth_hole_fits
+
+            for rbf, which, reach in smooth_hole_fits(faired, V, F[:n_before], n_input, work.normals[0], final,
+                                                      [np.setdiff1d(p, keep_still) for p in patch_ids], spacing):
+                V[which], whole = median_move(faired[which], V[which], rbf.project(faired[which], reach=reach))
+                moved = np.setdiff1d(moved, which[~whole])  # the whole APSS move: re-projected after the relaxation
+                smooth.append(which)
+            timings_note["fairing"] += f" + median with the RBF on {len(smooth)} holes" if smooth else ""
         # holes across thin parts (opposite normals around them): onto the RBF implicit of their rings
         tips = _thin_tips(V, F[:n_before], n_input, work.normals[0], final, patch_ids, keep_still,
                           spacing) if params.fit != "none" else []
