@@ -65,6 +65,13 @@ def test_dense_solve_matches_lapack_and_flags_singular():
     np.testing.assert_allclose(x, np.linalg.solve(A, b), atol=1e-10)
     A[:, 7] = 0.0  # a zero column: exactly singular
     assert not dense_solve(A, b)[1]
+    # one right-hand side and a symmetric indefinite matrix: the RBF fit's system (implicit.fit_rbf)
+    S = rng.standard_normal((60, 60))
+    S = S + S.T
+    y = rng.standard_normal((60, 1))
+    x, ok = dense_solve(S, y)
+    assert ok and np.allclose(x, np.linalg.solve(S, y), atol=1e-9)
+    assert not dense_solve(np.ones((3, 3)), np.ones((3, 1)))[1]
 
 
 def test_free_vertex_without_faces_keeps_its_position(monkeypatch):

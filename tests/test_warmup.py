@@ -66,7 +66,7 @@ def test_after_warmup_real_repairs_compile_nothing():
     assert got["kernels"] >= 40  # the field, tracer and darning kernels are all found
     assert got["new"] == {}, f"kernels compiled after the warm-up: {got['new']}"
     # the shapes reach the kernels the demos do not: the RBF of thin parts, the angle smoothing
-    for k in ("algorithms.darning.implicit._lu_solve", "algorithms.darning.refine_kernels._smooth_rounds"):
+    for k in ("algorithms.darning.fair_kernels.dense_solve", "algorithms.darning.refine_kernels._smooth_rounds"):
         assert k in got["used"]
 
 

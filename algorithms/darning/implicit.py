@@ -37,6 +37,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from .fair_kernels import dense_solve
+
 
 @dataclass(frozen=True, eq=False)
 class RBFImplicit:
@@ -158,9 +160,10 @@ def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacin
     K[:m, :m] = A
     K[:m, m:] = P
     K[m:, :m] = P.T
-    sol = _lu_solve(K, np.r_[y, np.zeros(4)])
-    if not np.all(np.isfinite(sol)):
+    sol, regular = dense_solve(K, np.r_[y, np.zeros(4)].reshape(-1, 1))
+    if not regular or not np.all(np.isfinite(sol)):
         raise np.linalg.LinAlgError("singular RBF system")
+    sol = sol[:, 0]
     return RBFImplicit(c, sol[:m], sol[m:])
 
 
@@ -189,46 +192,6 @@ def _rbf_eval(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.floa
         grad[k, 1] = g1
         grad[k, 2] = g2
     return val, grad
-
-
-@numba.njit(cache=True)
-def _lu_solve(A: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:  # pragma: no cover - compiled
-    """A x = b by Gaussian elimination with partial pivoting, compiled and single-threaded: the
-    systems here are a few hundred unknowns, where a threaded LAPACK solve spends its time waiting
-    for threads on a busy machine (measured 90 ms per fit against 4 ms). NaN if A is singular."""
-    a = A.copy()
-    x = b.copy()
-    n = a.shape[0]
-    for k in range(n):
-        p = k
-        big = abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > big:
-                big = abs(a[i, k])
-                p = i
-        if big == 0.0:
-            x[:] = np.nan
-            return x
-        if p != k:
-            for j in range(n):
-                t = a[k, j]
-                a[k, j] = a[p, j]
-                a[p, j] = t
-            t = x[k]
-            x[k] = x[p]
-            x[p] = t
-        for i in range(k + 1, n):
-            m = a[i, k] / a[k, k]
-            if m != 0.0:
-                for j in range(k + 1, n):
-                    a[i, j] -= m * a[k, j]
-                x[i] -= m * x[k]
-    for k in range(n - 1, -1, -1):
-        s = x[k]
-        for j in range(k + 1, n):
-            s -= a[k, j] * x[j]
-        x[k] = s / a[k, k]
-    return x
 
 
 def opposite_normals(normals: NDArray[np.float64], *, cos_bound: float = -0.95) -> bool:
