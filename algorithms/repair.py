@@ -341,7 +341,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             comps = list(guard.components().values())
             if len(comps) < 2:
                 break
-            sb = _join_components(work.V(), frames, comps, lc_used, params.field.ki)
+            sb = _join_components(work.V(), frames, comps, lc_used, params.field.ki,
+                                  {v for b in bridges for v in (b.start, b.end)})
             if sb is None:
                 break
             ia, ib, q = sb
@@ -765,8 +766,9 @@ def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: 
 
 
 def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]], lc: float,
-                     ki: float) -> tuple[int, int, float] | None:
-    """The best straight bridge from the first component's loops to any other component's loops."""
+                     ki: float, taken: set[int] = frozenset()) -> tuple[int, int, float] | None:
+    """The best straight bridge from the first component's loops to any other component's loops,
+    between loop vertices no kept bridge ends at (``taken``: two bridges may not share an end)."""
     first = set(comps[0])
     a_fr = [f for f in frames if f.island in first]
     b_fr = [f for f in frames if f.island not in first]
@@ -774,9 +776,13 @@ def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]
         return None
     A = np.concatenate([f.vertices for f in a_fr])
     B = np.concatenate([f.vertices for f in b_fr])
-    i, j, q = _best_straight_bridge(V[A], np.concatenate([f.tangent for f in a_fr]),
-                                    np.concatenate([f.normal for f in a_fr]), V[B],
-                                    np.concatenate([f.tangent for f in b_fr]), lc, ki)
+    ta, na = np.concatenate([f.tangent for f in a_fr]), np.concatenate([f.normal for f in a_fr])
+    tb = np.concatenate([f.tangent for f in b_fr])
+    fa, fb = ~np.isin(A, list(taken)), ~np.isin(B, list(taken))
+    if not fa.any() or not fb.any():
+        return None
+    A, ta, na, B, tb = A[fa], ta[fa], na[fa], B[fb], tb[fb]
+    i, j, q = _best_straight_bridge(V[A], ta, na, V[B], tb, lc, ki)
     return int(A[i]), int(B[j]), q
 
 
