@@ -54,7 +54,7 @@ def _fragments(model: Icadm) -> list[tuple[list[int], NDArray[np.int64]]]:
 
 def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
                      normals: NDArray[np.float64]) -> Attached:
-    """Walk every set-aside fragment that hangs at vertices of one hole polygon into that polygon.
+    """Walk every set-aside fragment that hangs at vertices of the hole polygons into them.
 
     polygons: hole polygons (surface on their left). normals: vertex normals of the working
     vertex array (the model's vertices first). A fragment is attached when it is an oriented disk
@@ -134,7 +134,10 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
             # joining holes at single vertices the walk passes them twice: bridged like a single
             # attachment's pinch (fragment_bridge)
             at += [m for m in to_hole.values() if any(q.count(m) > 1 for q in pieces)]
-        out_f.append(np.vectorize(lambda x: to_hole.get(int(x), int(x)), otypes=[np.int64])(faces))
+        mapped = faces.copy()
+        for a, m in to_hole.items():  # the attachment vertices as the holes number them
+            mapped[faces == a] = m
+        out_f.append(mapped)
         in_ids += fids
         flips += [flip] * len(fids)
         unit = fn / max(float(np.linalg.norm(fn)), 1e-300)
