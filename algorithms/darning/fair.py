@@ -98,43 +98,30 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
     is_free[free] = True
     fixed = np.flatnonzero(~is_free)
     f = _faces(faces)
-    small = len(free) <= DENSE_MAX  # the dense path reads L's CSR arrays, the sparse one a matrix
-
-    def laplacian(kind: str) -> sp.csr_matrix | tuple[NDArray, NDArray, NDArray]:
-        arrays = uniform_csr(f, len(v)) if kind == "uniform" else cotan_csr(out, f)
-        return arrays if small else _csr(arrays, len(v))
-
     for _ in range(1 if weights == "uniform" else iterations):  # sequential: cotan weights follow the positions
         if weights == "uniform":
-            out[free] = _fair_solve(laplacian("uniform"), out, free, fixed, ORDERS[operator], bare)
+            out[free] = _fair_solve(uniform_csr(f, len(v)), out, free, fixed, ORDERS[operator], bare)
             continue
         try:
-            out[free] = _fair_solve(laplacian("cotan"), out, free, fixed, ORDERS[operator], bare, strict=True)
+            out[free] = _fair_solve(cotan_csr(out, f), out, free, fixed, ORDERS[operator], bare, strict=True)
         except RuntimeError:  # singular cotangent system (degenerate triangles): uniform weights
-            out[free] = _fair_solve(laplacian("uniform"), out, free, fixed, ORDERS[operator], bare)
+            out[free] = _fair_solve(uniform_csr(f, len(v)), out, free, fixed, ORDERS[operator], bare)
     return out
 
 
-def _arrays(L: sp.csr_matrix | tuple[NDArray, NDArray, NDArray]) -> tuple[NDArray, NDArray, NDArray]:
-    """(indptr, indices, data) of L (int64, int64, float64), as the kernels take them."""
-    if isinstance(L, tuple):
-        return L
-    return (np.asarray(L.indptr, dtype=np.int64), np.asarray(L.indices, dtype=np.int64),
-            np.asarray(L.data, dtype=np.float64))
-
-
-def _fair_solve(L: sp.csr_matrix | tuple[NDArray, NDArray, NDArray], out: NDArray[np.float64],
-                free: NDArray[np.int64], fixed: NDArray[np.int64], k: int, bare: NDArray[np.int64] | None, *,
+def _fair_solve(L: tuple[NDArray, NDArray, NDArray], out: NDArray[np.float64], free: NDArray[np.int64],
+                fixed: NDArray[np.int64], k: int, bare: NDArray[np.int64] | None, *,
                 strict: bool = False) -> NDArray[np.float64]:
     """Positions of the free vertices with L^k x = 0 there (lower powers near bare vertices). L: the
-    matrix, or its CSR arrays (indptr, indices, data) for the dense path (at most DENSE_MAX free)."""
-    if isinstance(L, tuple) or len(free) <= DENSE_MAX:
-        return _fair_solve_dense(_arrays(L), out, free, k, bare, strict=strict)
+    Laplacian's CSR arrays (indptr, indices, data); at most DENSE_MAX free vertices take the dense path."""
+    if len(free) <= DENSE_MAX:
+        return _fair_solve_dense(L, out, free, k, bare, strict=strict)
+    M = _csr(L, len(out))
     # the rows of L^j at the free vertices only: row f of L^j = (row f of L^(j-1)) L, the same sums
     # as the whole product's row, without the rows of every fixed vertex
-    powers = [L[free]]
+    powers = [M[free]]
     for _ in range(k - 1):  # L^k: k = 3 also matches curvature across the border
-        powers.append((powers[-1] @ L).tocsr())
+        powers.append((powers[-1] @ M).tocsr())
     rows = powers[-1]
     if k > 1 and bare is not None and len(bare):
         # the row of L^j at f reads L at the vertices up to j-1 rings from f: a free vertex j
@@ -192,13 +179,13 @@ def _solve(A: sp.csr_matrix, rhs: NDArray[np.float64], x0: NDArray[np.float64], 
         return splu((A + eps * sp.identity(A.shape[0])).tocsc()).solve(rhs + eps * x0)
 
 
-def _bare_order(L: sp.csr_matrix | tuple[NDArray, NDArray, NDArray], n: int, free: NDArray[np.int64], k: int,
+def _bare_order(L: tuple[NDArray, NDArray, NDArray], n: int, free: NDArray[np.int64], k: int,
                 bare: NDArray[np.int64]) -> NDArray[np.int64]:
-    """(len(free),) min(k, rings from the nearest bare vertex) over the edges of L (compiled BFS,
-    fair_kernels.ring_distance)."""
+    """(len(free),) min(k, rings from the nearest bare vertex) over the edges of L (CSR arrays;
+    compiled BFS, fair_kernels.ring_distance)."""
     is_bare = np.zeros(n, dtype=bool)
     is_bare[np.asarray(bare, dtype=np.int64)] = True
-    return ring_distance(*_arrays(L), is_bare, int(k))[free]
+    return ring_distance(*L, is_bare, int(k))[free]
 
 
 def _mixed_rows(powers: list[sp.csr_matrix], order: NDArray[np.int64]) -> sp.csr_matrix:
