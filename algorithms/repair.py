@@ -1052,7 +1052,7 @@ def _thin_tip(V: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int, N: 
               lift: float = 8.0) -> tuple | None:
     """The (RBF implicit, fill vertices, reach, band) of the holes ``ks`` if they cross a thin part
     (_thin_tips), else None."""
-    from .darning.implicit import fit_rbf, opposite_normals
+    from .darning.implicit import fit_rings, opposite_normals
 
     lp = np.concatenate([loops[k] for k in ks])
     given = np.unique(lp[lp < n_input])
@@ -1062,20 +1062,13 @@ def _thin_tip(V: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int, N: 
         return None
     band = len(ks) > 1
     n_rings, offset, stride = band_fit if band else (rings, 1.0, 2)
-    sel = np.zeros(n_input, dtype=bool)
-    sel[given] = True
-    for _ in range(n_rings):
-        sel[F_in[sel[F_in].any(axis=1)].ravel()] = True
-    pts = np.flatnonzero(sel)
-    cap = max_points * min(len(ks), 2)  # a dense solve: a band reads at most twice a hole's points
-    if len(pts) > cap:
-        pts = pts[np.linspace(0, len(pts) - 1, cap).astype(np.int64)]
     which = np.setdiff1d(np.concatenate([*(patch_ids[k] for k in ks), chains[count > 1]]), keep_still)
     if not len(which):
         return None
-    try:
-        rbf = fit_rbf(V[pts], N[pts], spacing=spacing, stride=stride, offset=offset)
-    except (ValueError, np.linalg.LinAlgError):
+    # a dense solve: a band reads at most twice a hole's points
+    rbf = fit_rings(V, N, F_in, n_input, given, rings=n_rings, max_points=max_points * min(len(ks), 2),
+                    spacing=spacing, stride=stride, offset=offset)
+    if rbf is None:
         return None
     radius = float(np.linalg.norm(V[lp] - V[lp].mean(axis=0), axis=1).max())
     return rbf, which, min(radius, lift * spacing) if band else radius, band

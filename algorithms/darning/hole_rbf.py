@@ -41,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .implicit import RBFImplicit, fit_rbf, opposite_normals
+from .implicit import RBFImplicit, fit_rings, opposite_normals
 
 
 def smooth_hole_fits(V: NDArray[np.float64], V_apss: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int,
@@ -63,16 +63,9 @@ def smooth_hole_fits(V: NDArray[np.float64], V_apss: NDArray[np.float64], F_in: 
         given = np.unique(lp[lp < n_input])
         if len(given) < max(4, surrounded * len(np.unique(lp))) or opposite_normals(N[given]):
             continue
-        sel = np.zeros(n_input, dtype=bool)
-        sel[given] = True
-        for _ in range(rings):
-            sel[F_in[sel[F_in].any(axis=1)].ravel()] = True
-        pts = np.flatnonzero(sel)
-        if len(pts) > max_points:  # evenly thinned: a dense solve
-            pts = pts[np.linspace(0, len(pts) - 1, max_points).astype(np.int64)]
-        try:
-            rbf = fit_rbf(V[pts], N[pts], spacing=spacing, stride=stride, offset=offset)
-        except (ValueError, np.linalg.LinAlgError):
+        rbf = fit_rings(V, N, F_in, n_input, given, rings=rings, max_points=max_points, spacing=spacing,
+                        stride=stride, offset=offset)
+        if rbf is None:
             continue
         out.append((rbf, which, float(np.linalg.norm(V[lp] - V[lp].mean(axis=0), axis=1).max())))
     return out

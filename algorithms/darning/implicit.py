@@ -194,6 +194,25 @@ def _rbf_eval(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.floa
     return val, grad
 
 
+def fit_rings(V: NDArray[np.float64], N: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int,
+              given: NDArray[np.int64], *, rings: int, max_points: int, spacing: float, stride: int,
+              offset: float) -> RBFImplicit | None:
+    """fit_rbf of the input vertices within ``rings`` rings (over the input faces F_in) of the
+    vertices ``given`` (a hole's loop), evenly thinned to at most ``max_points`` (a dense solve);
+    None when the fit fails. V, N: positions and unit normals, the first ``n_input`` the input's."""
+    sel = np.zeros(n_input, dtype=bool)
+    sel[given] = True
+    for _ in range(rings):  # each ring: the faces touching the vertices reached so far
+        sel[F_in[sel[F_in].any(axis=1)].ravel()] = True
+    pts = np.flatnonzero(sel)
+    if len(pts) > max_points:
+        pts = pts[np.linspace(0, len(pts) - 1, max_points).astype(np.int64)]
+    try:
+        return fit_rbf(V[pts], N[pts], spacing=spacing, stride=stride, offset=offset)
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+
+
 def opposite_normals(normals: NDArray[np.float64], *, cos_bound: float = -0.95) -> bool:
     """Whether a hole crosses a thin part: two of the unit ``normals`` around it face (nearly)
     opposite ways (cosine below ``cos_bound``; the ear tip of the bunny: -0.99)."""
