@@ -490,12 +490,9 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 final.append(poly)
                 continue
             i, j, q = sb
+            line, kind = None, "island"
             pl = np.vstack([V[poly[i]], V[poly[j]]])
             pts = resample_chain(pl, spacing)
-            if not len(pts) and _is_edge(work.F(), poly[i], poly[j]):  # as a split's bare chord below
-                pts = pl.mean(axis=0)[None]
-            b = Bridge(int(poly[i]), int(poly[j]), pts, q, "island")
-            chain_normals = np.repeat(((N[poly[i]] + N[poly[j]]) / 2)[None], len(b.points), axis=0)
         else:
             frame = polygon_frame(V, N, poly, charge=params.field.charge)
             split = rf.split_line(model, frame, params.field, cancel=cancel)
@@ -505,6 +502,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 continue
             line, i, j = split
             lines.append(line)
+            q, kind = float(line.quality), "split"
             pl = np.vstack([V[poly[i]], line.points[1:-1], V[poly[j]]])
             pts = resample_chain(pl, spacing)
             if not len(pts) and pinned and np.isin(poly, np.concatenate(pinned)).any():
@@ -513,12 +511,13 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
                 if np.linalg.norm(V[list(poly)] - pts[0], axis=1).min() <= 1e-9 * spacing:
                     pts = pts[:0]  # an earlier split already put its vertex there: no second copy
-            if not len(pts) and _is_edge(work.F(), poly[i], poly[j]):
-                # a bare chord that is an edge already (featuretype cut by a slab: the border edge of a
-                # two-face island between its two bridges) would be non-manifold: one vertex midway
-                pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
-            b = Bridge(int(poly[i]), int(poly[j]), pts, float(line.quality), "split", len(lines) - 1)
-            chain_normals = _chain_normals(line, b.points)
+        if not len(pts) and _is_edge(work.F(), poly[i], poly[j]):
+            # a bare chord that is an edge already (featuretype cut by a slab: the border edge of a
+            # two-face island between its two bridges) would be non-manifold: one vertex midway
+            pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
+        b = Bridge(int(poly[i]), int(poly[j]), pts, q, kind, len(lines) - 1 if line is not None else -1)
+        chain_normals = (_chain_normals(line, pts) if line is not None
+                         else np.repeat(((N[poly[i]] + N[poly[j]]) / 2)[None], len(pts), axis=0))
         ids = work.add_vertices(b.points, chain_normals)
         bridges.append(b)
         records.append(HoleRecord(poly, verdict, origin, len(bridges) - 1))
