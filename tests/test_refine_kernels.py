@@ -137,9 +137,15 @@ def test_unchangeable_matches_the_numpy_test(seed):
     assert unchangeable(sub, len(p), fixed, locked).sum() > unchangeable(sub, len(p), fixed, None).sum()
 
 
-def test_corner_angles_match_the_numpy_expression():
-    from algorithms.darning.refine import _angle_at
+def _angle_at(p, apex, a, b):
+    """Angle at ``apex`` in the triangles (apex, a, b), radians: the numpy reference of the compiled
+    angles (refine.py's before its loops were compiled)."""
+    u = p[a] - p[apex]
+    w = p[b] - p[apex]
+    return np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
 
+
+def test_corner_angles_match_the_numpy_expression():
     rng = np.random.default_rng(4)
     p = rng.normal(size=(500, 3))
     f = rng.integers(0, 500, size=(2000, 3))

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+from test_refine_kernels import _angle_at
 
 from algorithms import cases
-from algorithms.darning.refine import _angle_at
 from algorithms.darning.split_kernels import centroid_splits, obtuse_edges
 from algorithms.topology import halfedges
 

@@ -55,14 +55,6 @@ def edge_scale(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], n_
         return np.where(c > 0, s / np.maximum(c, 1), np.nan)
 
 
-def _angle_at(p: NDArray[np.float64], apex: NDArray[np.int64], a: NDArray[np.int64],
-              b: NDArray[np.int64]) -> NDArray[np.float64]:
-    """Angle at ``apex`` in the triangles (apex, a, b), radians."""
-    u = p[a] - p[apex]
-    w = p[b] - p[apex]
-    return np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
-
-
 def relax(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed_faces: NDArray[np.int64], *,
           max_passes: int = 200, locked: NDArray[np.int64] | None = None) -> tuple[NDArray[np.int64], int]:
     """Delaunay edge flips on the patch-interior edges until none flips.
@@ -250,9 +242,9 @@ class AngleRefined:
 
 
 def corner_angles(p: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
-    """(M, 3) angle at each corner of each face, radians (column k: at f[:, k]): _angle_at per
-    corner, compiled (refine_kernels.corner_angles; tests/test_refine_kernels.py checks it against
-    _angle_at)."""
+    """(M, 3) angle at each corner of each face, radians (column k: at f[:, k]): atan2(|u x w|, u . w)
+    per corner, compiled (refine_kernels.corner_angles; tests/test_refine_kernels.py checks it against
+    the numpy expression)."""
     return _corner_angles(p, f)
 
 

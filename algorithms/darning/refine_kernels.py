@@ -5,8 +5,8 @@ whose every step reads the positions the previous step wrote (smart Laplacian sm
 vertex against its neighbours' current positions); in numpy each step is a dozen small array calls
 (~200 us of call overhead around ~2 us of arithmetic). Here the same steps run in one numba loop.
 The arithmetic is refine.py's, in the same order; tests/test_refine_kernels.py compares each
-kernel with the numpy function it replaces (kept in the test as its reference; corner angles against
-refine._angle_at, which refine.py still uses).
+kernel with the numpy function it replaces (kept in the test as its reference, as is the numpy
+angle at a corner).
 """
 
 from __future__ import annotations
