@@ -21,6 +21,7 @@ from PySide6.QtWidgets import (
     QFileDialog,
     QLabel,
     QMainWindow,
+    QMenu,
     QMessageBox,
     QProgressBar,
     QPushButton,
@@ -150,14 +151,30 @@ class MainWindow(QMainWindow):
         self.addAction(a)  # shortcuts work whatever has the focus
         return a
 
+    def _menu(self, parent, title: str) -> QMenu:
+        """A menu made here and added to ``parent`` (the menu bar or a menu).
+
+        Menus and actions are built in Python rather than taken from ``addMenu(title)`` /
+        ``addAction(text)``: those return the C++ object through Shiboken's address map, which
+        once (CI, after many VTK views) still held a stale wrapper of a deleted
+        QOffscreenSurface at the new action's address, so the "action" had no setStatusTip."""
+        m = QMenu(title, parent)
+        parent.addMenu(m)
+        return m
+
+    def _plain_action(self, menu: QMenu, text: str) -> QAction:
+        a = QAction(text, menu)
+        menu.addAction(a)
+        return a
+
     def _make_menus(self) -> None:
         mb = self.menuBar()
-        f = mb.addMenu("&File")
+        f = self._menu(mb, "&File")
         self.act_open = self._action(f, "&Open mesh…", self.open_dialog, QKeySequence.Open)
         self.act_points = self._action(f, "Open point &cloud…", self.open_points_dialog, "Ctrl+Shift+O",
                                        tip="add free points from a point cloud to the current mesh")
-        self.recent_menu = f.addMenu("Open &recent")
-        self.demos_menu_file = f.addMenu("&Demos")
+        self.recent_menu = self._menu(f, "Open &recent")
+        self.demos_menu_file = self._menu(f, "&Demos")
         f.addSeparator()
         self.act_save_input = self._action(f, "Save &mesh (normalised input)…", self.save_mesh_dialog, "Ctrl+S",
                                            tip="the input as normalised, with its free points")
@@ -172,7 +189,7 @@ class MainWindow(QMainWindow):
         f.addSeparator()
         self._action(f, "&Quit", self.close, QKeySequence.Quit)
 
-        e = mb.addMenu("&Edit")
+        e = self._menu(mb, "&Edit")
         self.act_undo = self._action(e, "&Undo parameter edit", self.model.undo, "Ctrl+Z")
         self.act_redo = self._action(e, "&Redo parameter edit", self.model.redo, "Ctrl+Shift+Z")
         self.act_undo.setEnabled(False)
@@ -184,7 +201,7 @@ class MainWindow(QMainWindow):
                                            "parameter edits then recompute it")
         self.act_cancel = self._action(e, "&Cancel computation", self.cancel, "Esc")
 
-        v = mb.addMenu("&View")
+        v = self._menu(mb, "&View")
         self.layer_actions: dict[str, QAction] = {}
         for name in LAYERS:
             a = self._action(v, LAYER_TITLES[name], lambda on, n=name: self.set_layer_visible(n, on),
@@ -201,7 +218,7 @@ class MainWindow(QMainWindow):
         for d in (self.dock_parameters, self.dock_inspector, self.dock_bridges, self.dock_plot, self.dock_timeline):
             v.addAction(d.toggleViewAction())
 
-        p = mb.addMenu("&Playback")
+        p = self._menu(mb, "&Playback")
         tl = self.timeline
         self._action(p, "&Play / pause", tl.toggle_play, "Space")
         self._action(p, "Step &forward", tl.step_forward, ".")
@@ -217,9 +234,9 @@ class MainWindow(QMainWindow):
                                                            "the force line")
         self.act_stages.setEnabled(False)
 
-        self.demos_menu = mb.addMenu("&Demos")
+        self.demos_menu = self._menu(mb, "&Demos")
         self._fill_demos()
-        h = mb.addMenu("&Help")
+        h = self._menu(mb, "&Help")
         self._action(h, "&Shortcuts", self.show_shortcuts, "F1")
         self._action(h, "&About Bridgefield", self.show_about)
         self._fill_recent()
@@ -240,7 +257,7 @@ class MainWindow(QMainWindow):
         for menu in (self.demos_menu, self.demos_menu_file):
             menu.clear()
             for name, d in all_demos().items():
-                a = menu.addAction(f"{name}  ({d.kind})")
+                a = self._plain_action(menu, f"{name}  ({d.kind})")
                 a.setStatusTip(d.description)
                 a.setToolTip(d.description)
                 a.triggered.connect(lambda *_, n=name: self.open_demo(n))
@@ -340,13 +357,13 @@ class MainWindow(QMainWindow):
         self.recent_menu.clear()
         rec = self.recent_files()
         for p in rec:
-            a = self.recent_menu.addAction(p)
+            a = self._plain_action(self.recent_menu, p)
             a.triggered.connect(lambda *_, q=p: self.open_path(q))
         if not rec:
-            self.recent_menu.addAction("(none)").setEnabled(False)
+            self._plain_action(self.recent_menu, "(none)").setEnabled(False)
         else:
             self.recent_menu.addSeparator()
-            self.recent_menu.addAction("Clear list").triggered.connect(self._clear_recent)
+            self._plain_action(self.recent_menu, "Clear list").triggered.connect(self._clear_recent)
 
     def _clear_recent(self) -> None:
         self.settings.setValue("recent", [])
