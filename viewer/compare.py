@@ -16,6 +16,7 @@ from PySide6.QtWidgets import QComboBox, QHBoxLayout, QLabel, QMainWindow, QVBox
 from pyvistaqt import QtInteractor
 
 from . import jobs
+from .plotter_close import close_plotter
 from .scene import SceneLayers, kept_mask, qualities
 from .worker import Worker
 
@@ -97,5 +98,5 @@ class CompareWindow(QMainWindow):
 
     def closeEvent(self, event) -> None:  # noqa: N802
         self.worker.shutdown()
-        self.plotter.close()
+        close_plotter(self.plotter)
         super().closeEvent(event)

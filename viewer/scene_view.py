@@ -15,6 +15,7 @@ from PySide6.QtCore import QObject, QTimer, Signal
 from PySide6.QtOpenGLWidgets import QOpenGLWidget
 from pyvistaqt import QtInteractor
 
+from .plotter_close import close_plotter
 from .scene import SceneLayers
 
 MULTI_SAMPLES = 1  # MSAA multiplies the per-pixel cost of software GL (Xvfb + llvmpipe) for little gain
@@ -184,4 +185,4 @@ class SceneView(QObject):
 
     def close(self) -> None:
         self.stop()
-        self.plotter.close()
+        close_plotter(self.plotter)

@@ -42,6 +42,7 @@ from algorithms.frep.objects import FRepObject, load_spec
 from algorithms.frep.pipeline import FAIRINGS, WEIGHTS, FrepParams, FrepResult, Stage, triangulate_object
 from algorithms.metrics import angle_stats, min_angles
 
+from ..plotter_close import close_plotter
 from ..to_pyvista import points, polylines, surface
 from .common import AngleHistogram, JobRunner, debounce, stats_text
 
@@ -455,7 +456,7 @@ class FrepWorkspace(QWidget):
             self.play_timer.stop()
             self._recompute_timer.stop()
             self.runner.shutdown()
-            self.plotter.close()
+            close_plotter(self.plotter)
         except RuntimeError:  # the Qt objects were already deleted with a parent
             pass
 

@@ -42,6 +42,7 @@ from algorithms.demos import all_demos
 from algorithms.hybrid.mesher import HybridParams, HybridResult, mesh_hybrid
 from algorithms.hybrid.spec import Spec, load_spec
 
+from ..plotter_close import close_plotter
 from ..to_pyvista import polylines, surface
 from .common import AngleHistogram, JobRunner, debounce, stats_text
 
@@ -455,7 +456,7 @@ class HybridWorkspace(QWidget):
         try:
             self._recompute_timer.stop()
             self.runner.shutdown()
-            self.plotter.close()
+            close_plotter(self.plotter)
         except RuntimeError:  # the Qt objects were already deleted with a parent
             pass
 
