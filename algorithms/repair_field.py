@@ -61,8 +61,8 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     boundaries), spec §6's two characteristic values. Start points: the local maxima of Omega,
     completed by evenly spaced points, ``starts_per_loop`` per loop.
 
-    Loops i and j are joined by a tunnel when two or more lines connect them and, from each of the
-    two loops, every line to the other one has a quality above every other line from that loop.
+    Loops i and j are joined by a tunnel when two or more lines connect them and every one of those
+    lines has a quality above every other line from either loop.
     ``force`` (tunnels "on") accepts the best connected pair without that comparison.
     """
     sel = [frames[k] for k in loop_ids]
@@ -128,27 +128,38 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
             every.append(ln)
             if ln.arrived:
                 from_loop.setdefault(k, []).append((pos_in.get(int(ln.end_vertex), -1), ln))
+    chosen, notes = tunnel_pairs(from_loop, loop_ids, force=force)
+    return LineSet(lc_inter, tuple(chosen), tuple(every), "; ".join(notes))
+
+
+def tunnel_pairs(from_loop: dict[int, list[tuple[int, ForceLine]]], loop_ids: list[int], *,
+                 force: bool = False) -> tuple[list[ForceLine], list[str]]:
+    """The tunnel rule (spec §6 step 2) on traced lines: ``from_loop[k]`` holds (target loop, line)
+    for every line from loop k that arrived (-1: not at a loop of ``loop_ids``). Loops a and b are
+    joined when two or more lines connect them (either direction) and every one of those lines has
+    a quality above every other line from a or from b. Returns the chosen lines and a note per pair.
+
+    Comparing only the lines from the same loop (as this once did) let two weak lines from a hole
+    at a cylinder's rim to the cut's loop (q 0.41, 0.43) pass: the cut's loop had no line to the
+    hole, only lines across its own hole (q 1.5), and nothing to compare with the weak ones.
+    ``force`` (tunnels "on") accepts every connected pair without that comparison."""
     chosen: list[ForceLine] = []
     notes = []
     for a in loop_ids:
         for b in loop_ids:
             if b <= a:
                 continue
-            ab = [ln for t, ln in from_loop.get(a, []) if t == b]
-            ba = [ln for t, ln in from_loop.get(b, []) if t == a]
-            if len(ab) + len(ba) < 2:
+            joining = ([ln for t, ln in from_loop.get(a, []) if t == b]
+                       + [ln for t, ln in from_loop.get(b, []) if t == a])
+            if len(joining) < 2:
                 continue
-
-            def wins(src_loop: int, to: list[ForceLine]) -> bool:
-                rest = [ln.quality for t, ln in from_loop.get(src_loop, []) if ln not in to]
-                return not to or min(ln.quality for ln in to) > max(rest, default=0.0)
-
-            ok = wins(a, ab) and wins(b, ba)
+            rest = [ln.quality for k in (a, b) for _, ln in from_loop.get(k, []) if all(ln is not j for j in joining)]
+            ok = min(ln.quality for ln in joining) > max(rest, default=0.0)
             if ok or force:
-                chosen += ab + ba
-            notes.append(f"loops {a} and {b}: {len(ab) + len(ba)} lines join them, "
+                chosen += joining
+            notes.append(f"loops {a} and {b}: {len(joining)} lines join them, "
                          f"{'a tunnel' if ok else ('forced' if force else 'beaten by lines across their own holes')}")
-    return LineSet(lc_inter, tuple(chosen), tuple(every), "; ".join(notes))
+    return chosen, notes
 
 
 def _loop_fields(src, frames: list[LoopFrame], loop_ids: list[int], params: FieldParams, lcs: list[float],
