@@ -313,8 +313,11 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         for key, m in med.items():
             for lp in key:
                 best[lp] = max(best.get(lp, 0.0), m)
+        # (of each loop: max of the two bests; with min, a loop that only this pair reaches passed
+        # trivially, and a cylinder cut by a slab and a ball at its rim grew a handle from the
+        # ball's hole to the far side of the slab, median 0.017 beside the band's 0.104)
         handle_pairs = {key for key, qs in by_pair.items()
-                        if len(qs) >= 3 and med[key] >= 0.5 * min(best[key[0]], best[key[1]])}
+                        if len(qs) >= 3 and med[key] >= 0.5 * max(best[key[0]], best[key[1]])}
         cands.sort(key=lambda c: (-support[tuple(sorted((loop_of[c[0].start][0], loop_of[c[0].end][0])))],
                                   -c[0].quality))
         joined: set[tuple[int, int]] = set()  # loop pairs a kept island bridge joins
