@@ -31,11 +31,13 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 from scipy.sparse.linalg import splu
+from scipy.spatial import cKDTree
 
 from .fair_kernels import cotan_csr, dense_solve, power_system, relax_steps, ring_distance, uniform_csr
 
 ORDERS = {"umbrella": 1, "U1": 1, "bilaplacian": 2, "U2": 2, "trilaplacian": 3, "U3": 3}
 WEIGHTINGS = ("uniform", "cotan")
+AGREE = 1.0  # calibrated below (fair(): cotangent against uniform weights, in reaches of the free region)
 # **(choice)** systems of at most this many free vertices (a hole's patch) are assembled compiled and
 # solved with dense LU (_fair_solve_dense); larger ones (a whole mesh's new vertices) stay sparse
 DENSE_MAX = 800
@@ -68,7 +70,7 @@ def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> 
 
 def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
          operator: str = "U2", weights: str = "uniform", iterations: int = 2,
-         bare: NDArray[np.int64] | None = None) -> NDArray[np.float64]:
+         bare: NDArray[np.int64] | None = None, agree: float = AGREE) -> NDArray[np.float64]:
     """New positions (V, 3) with the ``free`` vertices moved so that U1 = 0 or U2 = 0 there.
 
     faces must hold every face around the free vertices and, for U2, every face around their
@@ -106,7 +108,48 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
             out[free] = _fair_solve(cotan_csr(out, f), out, free, fixed, ORDERS[operator], bare, strict=True)
         except RuntimeError:  # singular cotangent system (degenerate triangles): uniform weights
             out[free] = _fair_solve(uniform_csr(f, len(v)), out, free, fixed, ORDERS[operator], bare)
+    if weights == "cotan":
+        # an ill-conditioned cotangent system that did not raise (slivers around the free vertices):
+        # a free region whose vertices it moved by more than ``agree`` reaches, and where it strays
+        # from the spec's uniform weights by as much, takes the uniform solution (the regions are
+        # independent systems: the fixed vertices separate them)
+        label, reach = free_regions(v, free, f)
+        lim = agree * reach[label]
+        moved = np.sqrt(((out[free] - v[free]) ** 2).sum(axis=1))
+        if not np.all(moved <= lim):  # NaN counts as too far
+            uni = _fair_solve(uniform_csr(f, len(v)), v.copy(), free, fixed, ORDERS[operator], bare)
+            off = ~(moved <= lim) & ~(np.sqrt(((out[free] - uni) ** 2).sum(axis=1)) <= lim)
+            bad = np.zeros(len(reach), dtype=bool)
+            np.logical_or.at(bad, label, off)
+            out[free[bad[label]]] = uni[bad[label]]
     return out
+
+
+def free_regions(before: NDArray[np.float64], free: NDArray[np.int64],
+                 faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """(label per free vertex, reach per label). A free region is a connected set of free vertices
+    (one hole's fill, or fills joined by free bridge chains); its reach is the largest distance of
+    its vertices to the nearest fixed vertex of a face touching a free vertex (inf if none)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    free = np.asarray(free, dtype=np.int64)
+    is_free = np.zeros(len(before), dtype=bool)
+    is_free[free] = True
+    f = faces[is_free[faces].any(axis=1)]
+    pos = np.full(len(before), -1, dtype=np.int64)
+    pos[free] = np.arange(len(free))
+    a, b = f.ravel(), np.roll(f, -1, axis=1).ravel()
+    both = is_free[a] & is_free[b]
+    g = coo_matrix((np.ones(int(both.sum())), (pos[a[both]], pos[b[both]])), shape=(len(free),) * 2)
+    label = connected_components(g, directed=False)[1] if len(free) else np.zeros(0, dtype=np.int64)
+    rim = np.unique(f[~is_free[f]])
+    if not len(rim):
+        return label, np.full(label.max(initial=-1) + 1, np.inf)
+    dist = cKDTree(before[rim]).query(before[free])[0]
+    reach = np.zeros(label.max(initial=-1) + 1)
+    np.maximum.at(reach, label, dist)
+    return label, reach
 
 
 def _fair_solve(L: tuple[NDArray, NDArray, NDArray], out: NDArray[np.float64], free: NDArray[np.int64],
