@@ -61,8 +61,9 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     boundaries), spec §6's two characteristic values. Start points: the local maxima of Omega,
     completed by evenly spaced points, ``starts_per_loop`` per loop.
 
-    Loops i and j are joined by a tunnel when two or more lines connect them and every one of those
-    lines has a quality above every other line from either loop.
+    Loops i and j are joined by a tunnel when two or more lines connect them and, from each of the
+    two loops, every line to the other one has a quality above every other line from that loop
+    (``tunnel_pairs``).
     ``force`` (tunnels "on") accepts the best connected pair without that comparison.
     """
     sel = [frames[k] for k in loop_ids]
@@ -136,28 +137,35 @@ def tunnel_pairs(from_loop: dict[int, list[tuple[int, ForceLine]]], loop_ids: li
                  force: bool = False) -> tuple[list[ForceLine], list[str]]:
     """The tunnel rule (spec §6 step 2) on traced lines: ``from_loop[k]`` holds (target loop, line)
     for every line from loop k that arrived (-1: not at a loop of ``loop_ids``). Loops a and b are
-    joined when two or more lines connect them (either direction) and every one of those lines has
-    a quality above every other line from a or from b. Returns the chosen lines and a note per pair.
+    joined when two or more lines connect them (either direction) and, from each of the two loops,
+    every line to the other one has a quality above every other line from that loop. Returns the
+    chosen lines and a note per pair. ``force`` (tunnels "on") accepts every connected pair without
+    that comparison.
 
-    Comparing only the lines from the same loop (as this once did) let two weak lines from a hole
-    at a cylinder's rim to the cut's loop (q 0.41, 0.43) pass: the cut's loop had no line to the
-    hole, only lines across its own hole (q 1.5), and nothing to compare with the weak ones.
-    ``force`` (tunnels "on") accepts every connected pair without that comparison."""
+    **(choice)** "every other line of those boundaries" is read per start loop. Read as every line
+    from either loop, it lost a real handle of featuretype cut by a slab: the three lines from a
+    cut through-hole's rim to the slab's loop (q 0.04-0.67) are far weaker than the slab loop's
+    lines to other loops (6-14), which say nothing about that rim (tests/test_repair_cad_cuts.py).
+    """
     chosen: list[ForceLine] = []
     notes = []
     for a in loop_ids:
         for b in loop_ids:
             if b <= a:
                 continue
-            joining = ([ln for t, ln in from_loop.get(a, []) if t == b]
-                       + [ln for t, ln in from_loop.get(b, []) if t == a])
-            if len(joining) < 2:
+            ab = [ln for t, ln in from_loop.get(a, []) if t == b]
+            ba = [ln for t, ln in from_loop.get(b, []) if t == a]
+            if len(ab) + len(ba) < 2:
                 continue
-            rest = [ln.quality for k in (a, b) for _, ln in from_loop.get(k, []) if all(ln is not j for j in joining)]
-            ok = min(ln.quality for ln in joining) > max(rest, default=0.0)
+
+            def wins(src: int, to: list[ForceLine]) -> bool:
+                rest = [ln.quality for _, ln in from_loop.get(src, []) if all(ln is not x for x in to)]
+                return not to or min(ln.quality for ln in to) > max(rest, default=0.0)
+
+            ok = wins(a, ab) and wins(b, ba)
             if ok or force:
-                chosen += joining
-            notes.append(f"loops {a} and {b}: {len(joining)} lines join them, "
+                chosen += ab + ba
+            notes.append(f"loops {a} and {b}: {len(ab) + len(ba)} lines join them, "
                          f"{'a tunnel' if ok else ('forced' if force else 'beaten by lines across their own holes')}")
     return chosen, notes
 
