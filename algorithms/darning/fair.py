@@ -37,7 +37,11 @@ from .fair_kernels import cotan_csr, dense_solve, power_system, relax_steps, rin
 
 ORDERS = {"umbrella": 1, "U1": 1, "bilaplacian": 2, "U2": 2, "trilaplacian": 3, "U3": 3}
 WEIGHTINGS = ("uniform", "cotan")
-AGREE = 1.0  # calibrated below (fair(): cotangent against uniform weights, in reaches of the free region)
+# **(choice)** fair(): a cotangent solve that moved a free region by more than this many reaches
+# and lies as far from the uniform solve is replaced by the uniform one. Measured: the bench's
+# repairs are unchanged (quick-repair, all 14 cases, both modes); the capsule strip moved 4.2
+# reaches, the cylinder band 1.26 (tests/test_repair_sliver_shapes.py)
+AGREE = 1.0
 # **(choice)** systems of at most this many free vertices (a hole's patch) are assembled compiled and
 # solved with dense LU (_fair_solve_dense); larger ones (a whole mesh's new vertices) stay sparse
 DENSE_MAX = 800
@@ -80,6 +84,7 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
         measured on the big-hole demo, a 62 degree cap of the unit sphere filled after repair:
         Hausdorff 3.0 % of the diagonal with U2, 0.35 % with U3, both cotangent weights).
     weights: "uniform" (the spec's) or "cotan" (recomputed ``iterations`` times).
+    agree: cotangent weights only: the ill-conditioning guard (``AGREE``, ``free_regions``).
     bare: fixed vertices whose own neighbourhood is missing (e.g. a bridge chain whose other side
         is not filled yet): L at such a vertex is meaningless, so a free vertex j rings from one
         solves L^min(k, j) x = 0 (next to a bare vertex U1 = 0: positions only as the boundary
