@@ -458,8 +458,17 @@ def _ends(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, ma
     return out
 
 
+def _convex(p: NDArray[np.float64], normals: NDArray[np.float64], c: Circle) -> bool:
+    """Whether the crease through p on circle c is a convex rim: of the two face normals along it,
+    the wall's (the one most across the axis) points away from the centre."""
+    r = p - c.center
+    r = r - (r @ c.axis) * c.axis
+    wall = normals[int(np.argmin(np.abs(normals @ c.axis)))]
+    return bool(wall @ r > 0)
+
+
 def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, spacing: float, *,
-                 max_turn: float = 25.0, max_normal_turn: float = 40.0, arcs: bool = False,
+                 max_turn: float = 25.0, max_normal_turn: float = 40.0, arcs: bool | str = False,
                  valid: Valid | None = None) -> CreaseSplit | None:
     """The best crease chain across the hole ``polygon``, or None.
 
@@ -471,7 +480,9 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
     circle and the arc from i along d_i arrives at j along -d_j (within ``max_turn``); they are
     joined along the arc (quality 2) when ``arcs`` is on (off by default: the band between two
     arcs of one cylinder, e.g. a pocket's rim and floor, is then darned across the pocket's
-    opening by the minimum-area triangulation). Otherwise a curved end goes on along its tangent.
+    opening by the minimum-area triangulation), or, with ``arcs="convex"``, when the circle is a
+    convex rim (the wall at both ends faces away from the centre: a cylinder's or a boss's edge,
+    not a pocket's). Otherwise a curved end goes on along its tangent.
     ``valid(i, j, points)``: a chain it refuses (e.g. one that runs over the input surface,
     ``Surface``) is not taken; the next best pair is.
     """
@@ -489,6 +500,8 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
                 continue
             if arcs and ci is not None and cj is not None and ci.same(cj):
                 if _shared(ni, nj, nlim) < 1:
+                    continue
+                if arcs == "convex" and not (_convex(V[polygon[i]], ni, ci) and _convex(V[polygon[j]], nj, cj)):
                     continue
                 got = arc(V[polygon[i]], di, V[polygon[j]], ci, spacing)
                 if got is None or float(got[1] @ -dj) < lim:

@@ -810,7 +810,10 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
         ids = work.add_vertices(pts, np.repeat(nrm[None], len(pts), axis=0))
         return Bridge(int(p[i]), int(p[j]), pts, q, "crease"), ids
 
-    straight = crease_split(V, poly, ends, spacing, valid=valid) or crease_line(V, poly, ends, spacing, valid=valid)
+    # arcs of convex rims only (a cylinder's edge interrupted by a hole; a pocket's rim and floor
+    # would leave their wall band to the minimum-area triangulation: featuretype 1.3 -> 2.2 %)
+    straight = (crease_split(V, poly, ends, spacing, arcs="convex", valid=valid)
+                or crease_line(V, poly, ends, spacing, valid=valid))
     if straight is not None:
         pts = straight.points
         a, c = V[poly[straight.i]], V[poly[straight.j]]
