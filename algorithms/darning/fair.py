@@ -75,7 +75,7 @@ def cotan_laplacian(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> 
 
 def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[np.int64], *,
          operator: str = "U2", weights: str = "uniform", iterations: int = 2,
-         bare: NDArray[np.int64] | None = None, agree: float = AGREE) -> NDArray[np.float64]:
+         bare: NDArray[np.int64] | None = None) -> NDArray[np.float64]:
     """New positions (V, 3) with the ``free`` vertices moved so that U1 = 0 or U2 = 0 there.
 
     faces must hold every face around the free vertices and, for U2, every face around their
@@ -85,7 +85,8 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
         measured on the big-hole demo, a 62 degree cap of the unit sphere filled after repair:
         Hausdorff 3.0 % of the diagonal with U2, 0.35 % with U3, both cotangent weights).
     weights: "uniform" (the spec's) or "cotan" (recomputed ``iterations`` times).
-    agree: cotangent weights only: the ill-conditioning guard (``AGREE``, ``free_regions``).
+    With cotangent weights, a region the system throws far is checked against the uniform solve
+    (``_cotan_guard``).
     bare: fixed vertices whose own neighbourhood is missing (e.g. a bridge chain whose other side
         is not filled yet): L at such a vertex is meaningless, so a free vertex j rings from one
         solves L^min(k, j) x = 0 (next to a bare vertex U1 = 0: positions only as the boundary
@@ -115,33 +116,55 @@ def fair(vertices: NDArray[np.float64], faces: NDArray[np.int64], free: NDArray[
         except RuntimeError:  # singular cotangent system (degenerate triangles): uniform weights
             out[free] = _fair_solve(uniform_csr(f, len(v)), out, free, fixed, ORDERS[operator], bare)
     if weights == "cotan":
-        # an ill-conditioned cotangent system that did not raise (slivers around the free vertices):
-        # a free region whose vertices it moved by more than ``agree`` reaches, and where it strays
-        # from the spec's uniform weights by as much, takes the uniform solution (the regions are
-        # independent systems: the fixed vertices separate them)
-        label, reach = free_regions(v, free, f)
-        lim = agree * reach[label]
-        moved = np.sqrt(((out[free] - v[free]) ** 2).sum(axis=1))
-        if not np.all(moved <= lim):  # NaN counts as too far
-            uni = _fair_solve(uniform_csr(f, len(v)), v.copy(), free, fixed, ORDERS[operator], bare)
-            off = ~(moved <= lim) & ~(np.sqrt(((out[free] - uni) ** 2).sum(axis=1)) <= lim)
-            bad = np.zeros(len(reach), dtype=bool)
-            np.logical_or.at(bad, label, off)
-            # only where the uniform solve itself stays within those reaches: a region both throw
-            # far is a near-singular system the callers' own fallbacks handle (plausible(), lower
-            # orders), better than uniform U3 (featuretype cut by a slab: 2.9 -> 10 % otherwise)
-            calm = np.ones(len(reach), dtype=bool)
-            np.logical_and.at(calm, label, np.sqrt(((uni - v[free]) ** 2).sum(axis=1)) <= lim)
-            take = (bad & calm)[label]
-            out[free[take]] = uni[take]
+        out = _cotan_guard(v, out, f, free, fixed, ORDERS[operator], bare)
     return out
 
 
-def free_regions(before: NDArray[np.float64], free: NDArray[np.int64],
-                 faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+def _cotan_guard(v: NDArray[np.float64], out: NDArray[np.float64], f: NDArray[np.int64], free: NDArray[np.int64],
+                 fixed: NDArray[np.int64], k: int, bare: NDArray[np.int64] | None) -> NDArray[np.float64]:
+    """An ill-conditioned cotangent system that did not raise (slivers around the free vertices):
+    a free region (``free_regions``) whose vertices it moved by more than AGREE reaches, and where
+    it strays from the spec's uniform weights by as much, takes the uniform solution, if that one
+    stays within as many reaches. The regions are independent systems (the fixed vertices separate
+    them). A region both solves throw far is a near-singular system the callers' own fallbacks
+    handle (plausible(), lower orders), better than uniform U3 (featuretype cut by a slab: 2.9 ->
+    10 % otherwise)."""
+    moved = np.linalg.norm(out[free] - v[free], axis=1)
+    dist = _rim_distance(v, free, f)
+    if np.all(moved <= AGREE * dist):  # a region's reach is at least each of its vertices' distance
+        return out
+    label, reach = free_regions(v, free, f, dist=dist)
+    lim = AGREE * reach[label]
+    uni = _fair_solve(uniform_csr(f, len(v)), v.copy(), free, fixed, k, bare)
+    off = ~(moved <= lim) & ~(np.linalg.norm(out[free] - uni, axis=1) <= lim)  # NaN counts as off
+    bad = np.zeros(len(reach), dtype=bool)
+    np.logical_or.at(bad, label, off)
+    calm = np.ones(len(reach), dtype=bool)
+    np.logical_and.at(calm, label, np.linalg.norm(uni - v[free], axis=1) <= lim)
+    take = (bad & calm)[label]
+    out[free[take]] = uni[take]
+    return out
+
+
+def _rim_distance(before: NDArray[np.float64], free: NDArray[np.int64],
+                 faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """(len(free),) each free vertex's distance to the nearest fixed vertex of a face touching a
+    free vertex (inf if there is none)."""
+    is_free = np.zeros(len(before), dtype=bool)
+    is_free[free] = True
+    f = faces[is_free[faces].any(axis=1)]
+    rim = np.unique(f[~is_free[f]])
+    if not len(rim):
+        return np.full(len(free), np.inf)
+    return cKDTree(before[rim]).query(before[free])[0]
+
+
+def free_regions(before: NDArray[np.float64], free: NDArray[np.int64], faces: NDArray[np.int64], *,
+                 dist: NDArray[np.float64] | None = None) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """(label per free vertex, reach per label). A free region is a connected set of free vertices
     (one hole's fill, or fills joined by free bridge chains); its reach is the largest distance of
-    its vertices to the nearest fixed vertex of a face touching a free vertex (inf if none)."""
+    its vertices to the nearest fixed vertex of a face touching a free vertex (``_rim_distance``,
+    given as ``dist`` when already known; inf if there is none)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -155,12 +178,8 @@ def free_regions(before: NDArray[np.float64], free: NDArray[np.int64],
     both = is_free[a] & is_free[b]
     g = coo_matrix((np.ones(int(both.sum())), (pos[a[both]], pos[b[both]])), shape=(len(free),) * 2)
     label = connected_components(g, directed=False)[1] if len(free) else np.zeros(0, dtype=np.int64)
-    rim = np.unique(f[~is_free[f]])
-    if not len(rim):
-        return label, np.full(label.max(initial=-1) + 1, np.inf)
-    dist = cKDTree(before[rim]).query(before[free])[0]
     reach = np.zeros(label.max(initial=-1) + 1)
-    np.maximum.at(reach, label, dist)
+    np.maximum.at(reach, label, _rim_distance(before, free, faces) if dist is None else dist)
     return label, reach
 
 
