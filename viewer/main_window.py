@@ -163,6 +163,8 @@ class MainWindow(QMainWindow):
         return m
 
     def _plain_action(self, menu: QMenu, text: str) -> QAction:
+        """An action owned by ``menu`` (menu.clear() deletes it: the demo and recent lists are
+        refilled), without the window-wide shortcut registration of ``_action``."""
         a = QAction(text, menu)
         menu.addAction(a)
         return a
