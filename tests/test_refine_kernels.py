@@ -9,7 +9,7 @@ import pytest
 from algorithms.cases import cap, cut, icosphere
 from algorithms.darning import refine, triangulate
 from algorithms.darning.refine import _tri_angles
-from algorithms.darning.refine_kernels import corner_angles, smooth_bad, stars, unchangeable
+from algorithms.darning.refine_kernels import corner_angles, smooth_bad, star_scores, stars, unchangeable
 from algorithms.topology import boundary_loops, halfedges
 
 
@@ -158,3 +158,35 @@ def test_corner_angles_match_the_numpy_expression():
     np.testing.assert_allclose(got[ok].sum(axis=1), np.pi, rtol=1e-12)
     right = corner_angles(np.array([[0.0, 0, 0], [2.0, 0, 0], [0, 1.0, 0]]), np.array([[0, 1, 2]]))
     np.testing.assert_allclose(right[0], [np.pi / 2, np.arctan2(1, 2), np.arctan2(2, 1)], rtol=1e-14)
+
+
+def _star_scores(t, at, x, n_old):
+    """refine._move_best's grid score in numpy (its code before the kernel): the star with the
+    corners ``at`` at each candidate, its smallest angle, -1 where a face's normal turns over."""
+    tt = np.broadcast_to(t, (len(x),) + t.shape).copy()
+    tt[:, at] = np.repeat(x, at.sum(), axis=0).reshape(len(x), -1, 3)
+    n2 = np.cross(tt[:, :, 1] - tt[:, :, 0], tt[:, :, 2] - tt[:, :, 0])
+    score = _tri_angles(tt).min(axis=(1, 2))
+    score[(np.einsum("kij,ij->ki", n2, n_old) <= 0).any(axis=1)] = -1.0
+    return score
+
+
+def test_star_scores_match_the_numpy_grid_score():
+    # a hexagonal fan around vertex 6 (at the origin), tilted out of the plane a little
+    ang = np.arange(6) * np.pi / 3
+    p = np.c_[np.cos(ang), np.sin(ang), 0.1 * np.sin(2 * ang)]
+    p = np.vstack([p, [0.0, 0.0, 0.0]])
+    star = np.array([[6, i, (i + 1) % 6] for i in range(6)])
+    t = p[star]
+    n_old = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    g = np.linspace(-1.5, 1.5, 31)
+    a, b = np.meshgrid(g, g)
+    x = np.c_[a.ravel(), b.ravel(), np.zeros(a.size)]
+    ref = _star_scores(t, star == 6, x, n_old)
+    got = star_scores(t, star == 6, x, n_old)
+    np.testing.assert_allclose(got, ref, rtol=1e-14, atol=1e-15)
+    # outside the hexagon some face turns over; at the centre nothing does, and the score is the
+    # smallest angle of the (nearly regular) fan
+    assert (got == -1).sum() > 100 and (got > 0).sum() > 100
+    centre = int(np.argmin(np.linalg.norm(x, axis=1)))
+    assert got[centre] == pytest.approx(corner_angles(p, star).min(), rel=1e-12)

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from ..topology import edge_table, halfedges
 from .flips import edge_keys_among, flip_passes
 from .refine_kernels import corner_angles as _corner_angles
-from .refine_kernels import smooth_bad, unchangeable
+from .refine_kernels import smooth_bad, star_scores, unchangeable
 from .split_kernels import centroid_splits, obtuse_edges
 
 
@@ -664,11 +664,7 @@ def _move_best(p: NDArray[np.float64], star: NDArray[np.int64], c: int, before: 
     for _ in range(levels):
         a, b = np.meshgrid(g * half, g * half)
         x = centre + a.reshape(-1, 1) * e1 + b.reshape(-1, 1) * e2  # (K, 3)
-        tt = np.broadcast_to(t, (len(x),) + t.shape).copy()
-        tt[:, at] = np.repeat(x, at.sum(), axis=0).reshape(len(x), -1, 3)
-        n2 = np.cross(tt[:, :, 1] - tt[:, :, 0], tt[:, :, 2] - tt[:, :, 0])
-        score = _tri_angles(tt).min(axis=(1, 2))
-        score[(np.einsum("kij,ij->ki", n2, n_old) <= 0).any(axis=1)] = -1.0  # a fold
+        score = star_scores(t, at, x, n_old)  # the star's smallest angle at each point, -1 where a face folds
         k = int(np.argmax(score))
         if score[k] > best_m:
             best_m, best_x = float(score[k]), x[k]

@@ -245,3 +245,49 @@ def corner_angles(p: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.fl
     compiled (atan2(|u x w|, u . w) per corner, no (M, 3) temporaries)."""
     return _corner_angles_kernel(np.ascontiguousarray(p, dtype=np.float64),
                                  np.ascontiguousarray(f, dtype=np.int64).reshape(-1, 3))
+
+
+@numba.njit(cache=True)
+def _star_scores_kernel(t: np.ndarray, at: np.ndarray, x: np.ndarray, n_old: np.ndarray) -> np.ndarray:
+    k_count = x.shape[0]
+    s = t.shape[0]
+    out = np.empty(k_count)
+    tt = np.empty((s, 3, 3))
+    ang = np.empty((s, 3))
+    for k in range(k_count):
+        for i in range(s):
+            for j in range(3):
+                for d in range(3):
+                    tt[i, j, d] = x[k, d] if at[i, j] else t[i, j, d]
+        fold = False
+        for i in range(s):
+            u0, u1, u2 = tt[i, 1, 0] - tt[i, 0, 0], tt[i, 1, 1] - tt[i, 0, 1], tt[i, 1, 2] - tt[i, 0, 2]
+            w0, w1, w2 = tt[i, 2, 0] - tt[i, 0, 0], tt[i, 2, 1] - tt[i, 0, 1], tt[i, 2, 2] - tt[i, 0, 2]
+            c0 = u1 * w2 - u2 * w1
+            c1 = u2 * w0 - u0 * w2
+            c2 = u0 * w1 - u1 * w0
+            if c0 * n_old[i, 0] + c1 * n_old[i, 1] + c2 * n_old[i, 2] <= 0:
+                fold = True
+                break
+        if fold:
+            out[k] = -1.0
+            continue
+        _angles_into(tt, ang)
+        m = np.inf
+        for i in range(s):
+            for j in range(3):
+                if ang[i, j] < m:
+                    m = ang[i, j]
+        out[k] = m
+    return out
+
+
+def star_scores(t: NDArray[np.float64], at: NDArray[np.bool_], x: NDArray[np.float64],
+                n_old: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(K,) the smallest angle (radians) of a star (S, 3, 3 corner positions) with the corners ``at``
+    (S, 3) moved to each candidate x[k], or -1 where a face folds (its normal against ``n_old`` (S, 3),
+    the star's normals before the move): refine._move_best's grid score, compiled (its numpy
+    reference is in tests/test_refine_kernels.py)."""
+    return _star_scores_kernel(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(at),
+                               np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 3),
+                               np.ascontiguousarray(n_old, dtype=np.float64))
