@@ -82,15 +82,20 @@ def test_split_chains_beside_creases_do_not_hug_an_input_edge(repaired):
             a, b, c = int(face[k]), int(face[(k + 1) % 3]), int(face[(k + 2) % 3])
             if a in new and b in inputs and c in inputs:  # a border edge or a chord between two of them
                 checked += 1
-                assert ang[k] <= 145.0, (face, ang)  # the other two angles sum to >= 35 deg
+                # hugging: both angles at the edge's ends small (the bug: 14.1 and 14.1). Not hugging: a face over
+                # the 0.41 border edge 248-245 with 17.5 at both ends (145.1 at the new vertex: refine._polish's
+                # graded fan, one face below 20 deg being forced at 248), or a crease corner (14.3 and 26.1)
+                assert max(ang[(k + 1) % 3], ang[(k + 2) % 3]) >= 15.0, (face, ang)
     assert checked >= 3
 
 
 def test_unforced_slivers_on_featuretype(repaired):
-    """featuretype-hole's patch: unforced angles (not between two input border edges) of at least 13
-    deg, and at most three faces below 15 deg (measured: 13.2 twice, beside a 0.41 border edge next
-    to the 0.04 edges of a boss rim, and 14.3 between a border edge and a continued crease; before
-    pinned vertices on a plane could move in the angle refinement, a fourth at 14.6 deg)."""
+    """featuretype-hole's patch: unforced angles (not between two input border edges) of at least 14
+    deg, at most one face below 15 deg (14.3, between a border edge and a continued crease: the input
+    border edge leaves the crease's end at that angle), and at most 7 % of the patch's faces below 20
+    deg unforced (measured 9 of 146, 6.2 %; the issue's target is 5 %). Before refine._polish: 13.2 deg
+    twice, beside a 0.41 border edge next to the 0.04 chords of a boss rim, and 14 faces (10.4 %)
+    below 20 deg."""
     from algorithms.metrics import forced_faces, min_angles
 
     cut, res = repaired
@@ -100,8 +105,9 @@ def test_unforced_slivers_on_featuretype(repaired):
     et = edge_table(np.asarray(cut.faces))
     forced = forced_faces(V, patch, idx[et.edges[et.counts == 1]])
     ang = min_angles(V, patch)[~forced]
-    assert ang.min() >= 13.0
-    assert (ang < 15.0).sum() <= 3
+    assert ang.min() >= 14.0
+    assert (ang < 15.0).sum() <= 1
+    assert (ang < 20.0).sum() <= 0.07 * len(patch)
 
 
 def test_flat_stars():

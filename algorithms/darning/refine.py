@@ -278,6 +278,9 @@ def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed
     quads aside); smoothing moves vertices in their tangent plane only. ``budget``: at most
     ``budget`` times the patch's faces are inserted (a safety bound; refinement around forced
     corners stops by the forced test).
+    Once the insertions stop, :func:`_polish` tries local changes on each face still below the bound
+    (a point, a halved edge, a graded fan at a border corner), keeping those that improve the angles
+    and fold nothing.
     ``movable``: vertices (besides the inserted ones) that the smoothing may move (new vertices of
     the patch; never input vertices). ``rings``: how far around the bad faces the patch may change.
     """
@@ -376,7 +379,231 @@ def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
         if not removed:
             break
     f, _ = relax(P, f, fixed, locked=lk)
-    return P, f, inserted, rounds
+    P, f, added = _polish(P, f, fixed, lk, np.r_[movable, np.ones(len(P) - nv0, dtype=bool)], strict)
+    return P, f, inserted + added, rounds
+
+
+def _score(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64], lk: NDArray[np.int64] | None,
+           strict: float, hard: float) -> tuple[int, int, float]:
+    """(faces below ``hard``, faces below ``strict``, minus the smallest angle), all over the faces that
+    are not forced: smaller is better, compared in that order."""
+    forced, bad, _ = _bad_triangles(p, f, fixed, lk, strict)
+    a = corner_angles(p, f[~forced]).min(axis=1)
+    return int((a < hard).sum()), int(bad.sum()), -float(a.min()) if len(a) else -np.pi
+
+
+def _pareto(sc: tuple[int, int, float], best: tuple[int, int, float]) -> bool:
+    """Whether the score ``sc`` (:func:`_score`) improves on ``best``: no more faces below the bound, no
+    smaller angle, one of them strictly (the faces below the hard bound may change among themselves)."""
+    return (sc[1], sc[2]) != (best[1], best[2]) and sc[1] <= best[1] and sc[2] <= best[2]
+
+
+def _better(sc: tuple[int, int, float], best: tuple[int, int, float]) -> bool:
+    """Whether the score ``sc`` (:func:`_score`) improves on ``best``: the smallest angle does not go
+    down, and either fewer faces are below the hard bound, or as many and no more below the bound,
+    and something changed. So a trial never trades the smallest angle for the count, and the count
+    below the bound may grow only to lift faces above the hard bound (the fans at a border corner
+    where every triangulation has a face below the bound: four faces at 17.5 deg instead of two at 13.5)."""
+    return sc[2] <= best[2] and sc != best and (sc[0] < best[0] or sc[0] == best[0] and sc[1] <= best[1])
+
+
+def _split_edge(f: NDArray[np.int64], i: int, e: int, m: int) -> NDArray[np.int64] | None:
+    """The faces with edge e of face i (f[i, e] -> f[i, e + 1]) halved at the new vertex m: both faces
+    of the edge split in two, orientation kept; None if the edge has no second face."""
+    a, b, c = f[i, e], f[i, (e + 1) % 3], f[i, (e + 2) % 3]
+    js = np.flatnonzero(((f == b) & (np.roll(f, -1, axis=1) == a)).any(axis=1))
+    if len(js) != 1:
+        return None
+    j = int(js[0])
+    d = int(f[j][(f[j] != a) & (f[j] != b)][0])
+    g = f.copy()
+    g[i] = (a, m, c)
+    g[j] = (b, m, d)
+    return np.vstack([g, [[m, b, c], [m, a, d]]])
+
+
+def _folds(p: NDArray[np.float64], f: NDArray[np.int64], *, cos: float = -0.25) -> int:
+    """The number of edges of ``f`` whose two faces turn more than acos(``cos``) against each other (105
+    deg: a face folded over its neighbour, not a surface bent smoothly; a CAD part's own sharp edges are
+    counted too, the same before and after a trial)."""
+    t = p[f]
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    he = halfedges(f)
+    key = np.minimum(he[:, 0], he[:, 1]) * len(p) + np.maximum(he[:, 0], he[:, 1])
+    o = np.argsort(key, kind="stable")
+    pair = np.flatnonzero(key[o][1:] == key[o][:-1])
+    return int((np.einsum("ij,ij->i", n[o[pair] // 3], n[o[pair + 1] // 3]) < cos).sum())
+
+
+def _graded_points(p: NDArray[np.float64], f: NDArray[np.int64], keep: NDArray[np.bool_], v: int, k: int
+                   ) -> NDArray[np.float64] | None:
+    """``k`` points for a graded fan at vertex ``v``: on rays from v that split the angle of its open
+    fan of faces (those not in ``keep``) evenly, at radii growing geometrically from the first spoke's
+    length to the last one's, so that each face of the new fan at v has spokes of a bounded ratio (in
+    a triangle with angle alpha at v and angles >= beta at its other corners, the ratio of the two
+    spokes is at most sin(180 - alpha - beta) / sin(beta): a 0.04 chord and a 0.41 border edge 60 deg
+    apart need four faces for 15 deg). None where the faces at v are not one open fan."""
+    rows = np.flatnonzero((f == v).any(axis=1) & ~keep)
+    if not len(rows):
+        return None
+    star = f[rows]
+    rot = np.argmax(star == v, axis=1)
+    a = star[np.arange(len(star)), (rot + 1) % 3]
+    b = star[np.arange(len(star)), (rot + 2) % 3]
+    first = np.setdiff1d(a, b)
+    if len(first) != 1 or len(np.unique(a)) != len(a):
+        return None
+    nxt = dict(zip(a.tolist(), b.tolist()))
+    link = [int(first[0])]
+    while link[-1] in nxt and len(link) <= len(a):
+        link.append(nxt[link[-1]])
+    if len(link) != len(a) + 1:
+        return None
+    t = p[star]
+    nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
+    if np.linalg.norm(nrm) == 0:
+        return None
+    nrm /= np.linalg.norm(nrm)
+    d0 = p[link[0]] - p[v]
+    r0, r1 = float(np.linalg.norm(d0)), float(np.linalg.norm(p[link[-1]] - p[v]))
+    e1 = d0 - (d0 @ nrm) * nrm
+    e1 /= max(float(np.linalg.norm(e1)), 1e-300)
+    e2 = np.cross(nrm, e1)  # towards the fan's other end (the faces wind counter-clockwise about nrm)
+    theta = corner_angles(p, np.c_[np.full(len(a), v), a, b])[:, 0].sum()
+    j = np.arange(1, k + 1)[:, None] / (k + 1)
+    return p[v] + r0 * (r1 / max(r0, 1e-300)) ** j * (np.cos(theta * j) * e1 + np.sin(theta * j) * e2)
+
+
+def _insert_points(p: NDArray[np.float64], f: NDArray[np.int64], x: NDArray[np.float64]
+                   ) -> tuple[NDArray[np.float64], NDArray[np.int64]] | None:
+    """Insert the points x one by one into the face they project into (the nearest such face's plane,
+    where the point is put), each splitting it in three. None if a point lies in no face."""
+    for y in x:  # sequential: each split changes the faces the next one may lie in
+        inside = _inside(p, f, np.broadcast_to(y, (len(f), 3)), margin=0.0)
+        if not inside.any():
+            return None
+        cand = np.flatnonzero(inside)
+        t = p[f[cand]]
+        n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+        d = np.einsum("ij,ij->i", y - t[:, 0], n)
+        h = int(np.argmin(np.abs(d)))
+        i, m = int(cand[h]), len(p)
+        p = np.vstack([p, y - d[h] * n[h]])
+        i0, i1, i2 = f[i]
+        f = np.vstack([f[:i], [[i0, i1, m]], f[i + 1:], [[i1, i2, m], [i2, i0, m]]])
+    return p, f
+
+
+def _best_trial(trials: list, p: NDArray[np.float64], m: int, ring: NDArray[np.int64], held: NDArray[np.int64],
+                lk: NDArray[np.int64] | None, strict: float, hard: float, near: float, sweeps: int,
+                folds: int, best: tuple[int, int, float], better) -> tuple | None:
+    """:func:`_polish`'s trials (vertices, faces, free flags, points added), each flipped and smoothed:
+    the best that improves on ``best`` (:func:`_better`), as (score, vertices, faces, free, points
+    added), or None."""
+    chosen = None
+    for q, g, fr, n_new in trials:  # independent trials (a handful)
+        verts = np.r_[np.arange(m, len(q)), ring]
+        verts = verts[fr[verts]]
+        for s in range(2 * sweeps):
+            if s % 2 == 0:
+                g, _ = relax(q, g, held, locked=lk)
+            for c in verts:  # sequential: each move changes its neighbours' stars
+                rows = np.flatnonzero((g == c).any(axis=1))
+                before = corner_angles(q, g[rows]).min()
+                if before < strict + near:  # a star well above the bound: left as it is (time)
+                    _move_best(q, g[rows], int(c), before)
+        g, _ = relax(q, g, held, locked=lk)
+        if not _manifold(np.vstack([held, g])) or _folds(q, np.vstack([held, g])) > folds:
+            continue
+        sc = _score(q, g, held, lk, strict, hard)
+        if better(sc, best) and (chosen is None or sc < chosen[0]):
+            chosen = (sc, q, g, fr, n_new)
+    return chosen
+
+
+def _polish(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64], lk: NDArray[np.int64] | None,
+            free: NDArray[np.bool_], strict: float, *, rounds: int = 3, per_round: int = 40, sweeps: int = 2,
+            near: float = np.radians(5.0), hard: float | None = None
+            ) -> tuple[NDArray[np.float64], NDArray[np.int64], int]:
+    """The faces the refinement left below ``strict`` (radians) and not forced, worst first: each tries
+    (a) moving the free vertices around it, (b) a new point at its centroid, (c) each of its edges that
+    may split halved; every trial is followed by flips (:func:`relax`) and ``sweeps`` rounds of two
+    :func:`_move_best` passes over the new point and the free vertices of the faces at the face's
+    corners whose stars have an angle within ``near`` (radians) of ``strict``. The trials change only
+    the faces at those vertices (the rest is held like the border, as :func:`refine_angles` holds the
+    faces outside its region), and the best one is kept when it improves them (:func:`_pareto`: no
+    more faces below ``strict`` and no smaller angle, over the faces that are not forced, one of them
+    strictly, so the whole patch improves too) and folds no more faces over their neighbours
+    (:func:`_folds`). Where none does, graded fans at the face's pinned corners (:func:`_graded_points`,
+    1-4 points) are tried the same way; where none of those does either and the face is below ``hard``
+    (default 3/4 of ``strict``: 15 deg for 20), any trial that lifts faces above ``hard`` without
+    lowering the smallest angle (:func:`_better`).
+
+    A local search, not a Delaunay refinement: where the border forbids every point the off-centre rule
+    would insert (a 0.41 border edge beside a fan of 0.04 chords, featuretype: 13.2 deg), points in
+    the face or on rays from the corner, plus moves of their neighbours, still find a fan that grades
+    from the short edges to the long one. ``per_round`` bounds the faces tried per round. Returns
+    (vertices, faces, points added).
+    """
+    hard = 0.75 * strict if hard is None else hard
+    added = 0
+    for _ in range(rounds):  # sequential: each kept trial changes the next face's surroundings
+        _, bad, _ = _bad_triangles(p, f, fixed, lk, strict)
+        if not bad.any():
+            break
+        ang = corner_angles(p, f).min(axis=1)
+        order = np.flatnonzero(bad)[np.argsort(ang[bad], kind="stable")][:per_round]
+        kept = False
+        for tri in f[order].copy():  # sequential: trials on the current mesh
+            hit = np.flatnonzero((f == tri).all(axis=1))
+            if not len(hit):
+                continue  # a kept trial of an earlier face changed this one
+            ring = np.unique(f[np.isin(f, tri).any(axis=1)])
+            loc = np.isin(f, ring).any(axis=1)  # every face at a vertex that may move
+            sub, rest = f[loc], f[~loc]
+            at = np.unique(sub)
+            held = np.vstack([fixed[np.isin(fixed, at).any(axis=1)], rest[np.isin(rest, at).any(axis=1)]])
+            i = int(np.flatnonzero((sub == tri).all(axis=1))[0])
+            best = _score(p, sub, held, lk, strict, hard)
+            folds = _folds(p, np.vstack([held, sub]))  # no trial may fold more faces over their neighbours
+            stuck = unchangeable(sub, len(p), held, lk)
+            m = len(p)
+            a, b, c = tri
+            split3 = np.vstack([sub[:i], [[a, b, m]], sub[i + 1:], [[b, c, m], [c, a, m]]])
+            trials = [(p.copy(), sub.copy(), free, 0),
+                      (np.vstack([p, p[tri].mean(axis=0)]), split3, np.r_[free, True], 1)]
+            for e in range(3):
+                g = None if stuck[i, e] else _split_edge(sub, i, e, m)
+                if g is not None:
+                    trials.append((np.vstack([p, (p[tri[e]] + p[tri[(e + 1) % 3]]) / 2]), g, np.r_[free, True], 1))
+            forced = _bad_triangles(p, sub, held, lk, strict)[0]
+            fans = [(v, k) for v in tri[~free[tri]] for k in (1, 2, 3, 4)]  # graded fans at its pinned corners
+
+            def fan(v: int, k: int) -> tuple | None:
+                x = _graded_points(p, sub, forced, int(v), k)
+                got = None if x is None else _insert_points(p, sub, x)
+                return None if got is None else (got[0], got[1], np.r_[free, np.ones(k, dtype=bool)], k)
+
+            # the simple trials first, then the fans (dearer: several points each), each kept only if it
+            # improves both counts (_pareto); then either, if it lifts faces above the hard bound (_better)
+            done = [trials]
+            chosen = _best_trial(trials, p, m, ring, held, lk, strict, hard, near, sweeps, folds, best, _pareto)
+            if chosen is None:
+                done.append([t for t in (fan(v, k) for v, k in fans) if t is not None])
+                chosen = _best_trial(done[-1], p, m, ring, held, lk, strict, hard, near, sweeps, folds, best, _pareto)
+            if chosen is None and best[0]:
+                chosen = _best_trial(done[0] + done[1], p, m, ring, held, lk, strict, hard, near, sweeps, folds, best,
+                                     _better)
+            if chosen is not None:
+                _, p, g, free, n_new = chosen
+                f = np.vstack([rest, g])
+                added += n_new
+                kept = True
+        if not kept:
+            break
+    return p, f, added
 
 
 def _inside(p: NDArray[np.float64], tri: NDArray[np.int64], q: NDArray[np.float64], *,
