@@ -9,7 +9,7 @@ import pytest
 from algorithms.cases import cap, cut, icosphere
 from algorithms.darning import refine, triangulate
 from algorithms.darning.refine import _tri_angles
-from algorithms.darning.refine_kernels import corner_angles, smooth_bad, star_scores, stars, unchangeable
+from algorithms.darning.refine_kernels import corner_angles, grid_search, smooth_bad, star_scores, stars, unchangeable
 from algorithms.topology import boundary_loops, halfedges
 
 
@@ -190,3 +190,39 @@ def test_star_scores_match_the_numpy_grid_score():
     assert (got == -1).sum() > 100 and (got > 0).sum() > 100
     centre = int(np.argmin(np.linalg.norm(x, axis=1)))
     assert got[centre] == pytest.approx(corner_angles(p, star).min(), rel=1e-12)
+
+
+def _grid_search(t, at, centre, half, e1, e2, n_old, threshold, grid, levels):
+    """refine._move_best's search loop in numpy (its code before the kernel)."""
+    best_m, best_x = threshold, None
+    g = np.linspace(-1.0, 1.0, grid)
+    for _ in range(levels):
+        a, b = np.meshgrid(g * half, g * half)
+        x = centre + a.reshape(-1, 1) * e1 + b.reshape(-1, 1) * e2
+        score = _star_scores(t, at, x, n_old)
+        k = int(np.argmax(score))
+        if score[k] > best_m:
+            best_m, best_x = float(score[k]), x[k]
+        if best_x is None:
+            return np.full(3, np.nan)
+        centre, half = best_x, half * 2.0 / (grid - 1) * 2
+    return best_x
+
+
+@pytest.mark.parametrize("grid", [11, 21])
+def test_grid_search_matches_the_numpy_loop(grid):
+    rng = np.random.default_rng(7)
+    ang = np.sort(rng.uniform(0, 2 * np.pi, 7))
+    r = rng.uniform(0.5, 1.5, 7)
+    p = np.vstack([np.c_[r * np.cos(ang), r * np.sin(ang), 0.05 * rng.normal(size=7)], [0.6, 0.3, 0.0]])
+    star = np.array([[7, i, (i + 1) % 7] for i in range(7)])
+    t = p[star]
+    n_old = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    e1, e2 = np.array([1.0, 0, 0]), np.array([0, 1.0, 0])
+    before = corner_angles(p, star).min()
+    ref = _grid_search(t, star == 7, p[7], 1.5, e1, e2, n_old, before, grid, 4)
+    got = grid_search(t, star == 7, p[7], 1.5, e1, e2, n_old, before, grid, 4)
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-15)
+    assert not np.isnan(got).any()  # the off-centre vertex has a better place
+    # nothing beats an impossible threshold: NaNs
+    assert np.isnan(grid_search(t, star == 7, p[7], 1.5, e1, e2, n_old, np.pi, grid, 4)).all()

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from ..topology import edge_table, halfedges
 from .flips import edge_keys_among, flip_passes
 from .refine_kernels import corner_angles as _corner_angles
-from .refine_kernels import smooth_bad, star_scores, unchangeable
+from .refine_kernels import grid_search, smooth_bad, unchangeable
 from .split_kernels import centroid_splits, obtuse_edges
 
 
@@ -496,13 +496,13 @@ def _insert_points(p: NDArray[np.float64], f: NDArray[np.int64], x: NDArray[np.f
     return p, f
 
 
-def _best_trial(trials: list, p: NDArray[np.float64], m: int, ring: NDArray[np.int64], held: NDArray[np.int64],
+def _run_trials(trials: list, p: NDArray[np.float64], m: int, ring: NDArray[np.int64], held: NDArray[np.int64],
                 lk: NDArray[np.int64] | None, strict: float, hard: float, near: float, sweeps: int,
-                folds: int, best: tuple[int, int, float], better) -> tuple | None:
-    """:func:`_polish`'s trials (vertices, faces, free flags, points added), each flipped and smoothed:
-    the best that improves on ``best`` (:func:`_better`), as (score, vertices, faces, free, points
-    added), or None."""
-    chosen = None
+                folds: int) -> list:
+    """:func:`_polish`'s trials (vertices, faces, free flags, points added), each flipped and smoothed
+    (moves on an 11 x 11 grid: a trial is one of many), as (score, vertices, faces, free, points added)
+    for those that stay a manifold and fold no more faces than ``folds``."""
+    out = []
     for q, g, fr, n_new in trials:  # independent trials (a handful)
         verts = np.r_[np.arange(m, len(q)), ring]
         verts = verts[fr[verts]]
@@ -513,18 +513,22 @@ def _best_trial(trials: list, p: NDArray[np.float64], m: int, ring: NDArray[np.i
                 rows = np.flatnonzero((g == c).any(axis=1))
                 before = corner_angles(q, g[rows]).min()
                 if before < strict + near:  # a star well above the bound: left as it is (time)
-                    _move_best(q, g[rows], int(c), before)
+                    _move_best(q, g[rows], int(c), before, grid=11)
         g, _ = relax(q, g, held, locked=lk)
-        if not _manifold(np.vstack([held, g])) or _folds(q, np.vstack([held, g])) > folds:
-            continue
-        sc = _score(q, g, held, lk, strict, hard)
-        if better(sc, best) and (chosen is None or sc < chosen[0]):
-            chosen = (sc, q, g, fr, n_new)
-    return chosen
+        if _manifold(np.vstack([held, g])) and _folds(q, np.vstack([held, g])) <= folds:
+            out.append((_score(q, g, held, lk, strict, hard), q, g, fr, n_new))
+    return out
+
+
+def _pick(done: list, best: tuple[int, int, float], better) -> tuple | None:
+    """The trial of ``done`` (:func:`_run_trials`) with the smallest score among those ``better`` than
+    ``best``, or None."""
+    ok = [t for t in done if better(t[0], best)]
+    return min(ok, key=lambda t: t[0]) if ok else None
 
 
 def _polish(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64], lk: NDArray[np.int64] | None,
-            free: NDArray[np.bool_], strict: float, *, rounds: int = 3, per_round: int = 40, sweeps: int = 2,
+            free: NDArray[np.bool_], strict: float, *, rounds: int = 3, tries: int = 30, sweeps: int = 2,
             near: float = np.radians(5.0), hard: float | None = None
             ) -> tuple[NDArray[np.float64], NDArray[np.int64], int]:
     """The faces the refinement left below ``strict`` (radians) and not forced, worst first: each tries
@@ -544,18 +548,21 @@ def _polish(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     A local search, not a Delaunay refinement: where the border forbids every point the off-centre rule
     would insert (a 0.41 border edge beside a fan of 0.04 chords, featuretype: 13.2 deg), points in
     the face or on rays from the corner, plus moves of their neighbours, still find a fan that grades
-    from the short edges to the long one. ``per_round`` bounds the faces tried per round. Returns
-    (vertices, faces, points added).
+    from the short edges to the long one. ``tries`` bounds the faces tried, over all ``rounds`` (a
+    rounded cube of input slivers: 30 faces cost 3 s; without a bound, 8 s more for 19 faces fewer
+    below the bound). Returns (vertices, faces, points added).
     """
     hard = 0.75 * strict if hard is None else hard
-    added = 0
+    added = tried = 0
     for _ in range(rounds):  # sequential: each kept trial changes the next face's surroundings
         _, bad, _ = _bad_triangles(p, f, fixed, lk, strict)
         if not bad.any():
             break
         ang = corner_angles(p, f).min(axis=1)
-        order = np.flatnonzero(bad)[np.argsort(ang[bad], kind="stable")][:per_round]
+        order = np.flatnonzero(bad)[np.argsort(ang[bad], kind="stable")]
         kept = False
+        if tried >= tries:
+            break
         for tri in f[order].copy():  # sequential: trials on the current mesh
             hit = np.flatnonzero((f == tri).all(axis=1))
             if not len(hit):
@@ -588,19 +595,20 @@ def _polish(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
 
             # the simple trials first, then the fans (dearer: several points each), each kept only if it
             # improves both counts (_pareto); then either, if it lifts faces above the hard bound (_better)
-            done = [trials]
-            chosen = _best_trial(trials, p, m, ring, held, lk, strict, hard, near, sweeps, folds, best, _pareto)
+            args = (p, m, ring, held, lk, strict, hard, near, sweeps, folds)
+            done = _run_trials(trials, *args)
+            chosen = _pick(done, best, _pareto)
             if chosen is None:
-                done.append([t for t in (fan(v, k) for v, k in fans) if t is not None])
-                chosen = _best_trial(done[-1], p, m, ring, held, lk, strict, hard, near, sweeps, folds, best, _pareto)
-            if chosen is None and best[0]:
-                chosen = _best_trial(done[0] + done[1], p, m, ring, held, lk, strict, hard, near, sweeps, folds, best,
-                                     _better)
+                fans = _run_trials([t for t in (fan(v, k) for v, k in fans) if t is not None], *args)
+                chosen = _pick(fans, best, _pareto) or _pick(done + fans, best, _better)
             if chosen is not None:
                 _, p, g, free, n_new = chosen
                 f = np.vstack([rest, g])
                 added += n_new
                 kept = True
+            tried += 1
+            if tried >= tries:
+                break
         if not kept:
             break
     return p, f, added
@@ -865,6 +873,12 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
     return f, done
 
 
+def _cross(u: NDArray[np.float64], w: NDArray[np.float64]) -> NDArray[np.float64]:
+    """u x w over the last axis (3), without np.cross's axis handling."""
+    return np.stack([u[..., 1] * w[..., 2] - u[..., 2] * w[..., 1], u[..., 2] * w[..., 0] - u[..., 0] * w[..., 2],
+                     u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]], axis=-1)
+
+
 def _move_best(p: NDArray[np.float64], star: NDArray[np.int64], c: int, before: float, *, grid: int = 21,
                levels: int = 4, gain: float = np.radians(0.1)) -> bool:
     """Move vertex ``c`` (in place) to the point of its star's tangent plane where the smallest angle
@@ -874,29 +888,19 @@ def _move_best(p: NDArray[np.float64], star: NDArray[np.int64], c: int, before: 
     two directions only; a vertex squeezed against a border vertex may need to move across its star
     (bunny scan: 9.8 -> 40 degrees where no collapse kept the surface a manifold)."""
     t = p[star]
-    n_old = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    n_old = _cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])  # (np.cross costs more than the search on a small star)
     nrm = n_old.sum(axis=0)
-    nn = float(np.linalg.norm(nrm))
+    nn = float(np.sqrt(nrm @ nrm))
     if nn == 0:
         return False
     nrm /= nn
-    e1 = np.cross(nrm, np.eye(3)[int(np.argmin(np.abs(nrm)))])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(nrm, e1)
+    e1 = _cross(nrm, np.eye(3)[int(np.argmin(np.abs(nrm)))])
+    e1 /= np.sqrt(e1 @ e1)
+    e2 = _cross(nrm, e1)
     at = star == c
-    half = float(np.linalg.norm(p[np.unique(star)] - p[c], axis=1).max())
-    centre = p[c].copy()
-    best_m, best_x = before + gain, None
-    g = np.linspace(-1.0, 1.0, grid)
-    for _ in range(levels):
-        a, b = np.meshgrid(g * half, g * half)
-        x = centre + a.reshape(-1, 1) * e1 + b.reshape(-1, 1) * e2  # (K, 3)
-        score = star_scores(t, at, x, n_old)  # the star's smallest angle at each point, -1 where a face folds
-        k = int(np.argmax(score))
-        if score[k] > best_m:
-            best_m, best_x = float(score[k]), x[k]
-        if best_x is None:
-            return False
-        centre, half = best_x, half * 2.0 / (grid - 1) * 2
-    p[c] = best_x
+    half = float(np.sqrt(((t - p[c]) ** 2).sum(axis=2).max()))  # the farthest ring vertex
+    x = grid_search(t, at, p[c], half, e1, e2, n_old, before + gain, grid, levels)
+    if np.isnan(x[0]):
+        return False
+    p[c] = x
     return True

@@ -291,3 +291,42 @@ def star_scores(t: NDArray[np.float64], at: NDArray[np.bool_], x: NDArray[np.flo
     return _star_scores_kernel(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(at),
                                np.ascontiguousarray(x, dtype=np.float64).reshape(-1, 3),
                                np.ascontiguousarray(n_old, dtype=np.float64))
+
+
+@numba.njit(cache=True)
+def _grid_search_kernel(t: np.ndarray, at: np.ndarray, centre: np.ndarray, half: float, e1: np.ndarray,
+                        e2: np.ndarray, n_old: np.ndarray, threshold: float, grid: int, levels: int) -> np.ndarray:
+    best_m = threshold
+    best = np.full(3, np.nan)
+    x = np.empty((grid * grid, 3))
+    c = centre.copy()
+    for _ in range(levels):
+        for i in range(grid):
+            for j in range(grid):
+                a = (-1.0 + 2.0 * j / (grid - 1)) * half
+                b = (-1.0 + 2.0 * i / (grid - 1)) * half
+                for d in range(3):
+                    x[i * grid + j, d] = c[d] + a * e1[d] + b * e2[d]
+        score = _star_scores_kernel(t, at, x, n_old)
+        k = int(np.argmax(score))
+        if score[k] > best_m:
+            best_m = score[k]
+            best[:] = x[k]
+        if np.isnan(best[0]):
+            return best
+        c[:] = best
+        half = half * 2.0 / (grid - 1) * 2
+    return best
+
+
+def grid_search(t: NDArray[np.float64], at: NDArray[np.bool_], centre: NDArray[np.float64], half: float,
+                e1: NDArray[np.float64], e2: NDArray[np.float64], n_old: NDArray[np.float64], threshold: float,
+                grid: int, levels: int) -> NDArray[np.float64]:
+    """refine._move_best's search, compiled: ``levels`` rounds of a ``grid`` x ``grid`` grid of points
+    centre + a e1 + b e2 (|a|, |b| <= half), each round around the best point so far with the spacing of
+    two grid steps as its new half width; returns the point whose :func:`star_scores` is largest and
+    above ``threshold``, or NaNs (the same points, in the same order, as the numpy loop it replaced)."""
+    return _grid_search_kernel(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(at),
+                               np.asarray(centre, dtype=np.float64), float(half), np.asarray(e1, dtype=np.float64),
+                               np.asarray(e2, dtype=np.float64), np.ascontiguousarray(n_old, dtype=np.float64),
+                               float(threshold), int(grid), int(levels))
