@@ -8,12 +8,24 @@ import pytest
 
 from algorithms.cases import cap, cut, icosphere
 from algorithms.darning import refine, triangulate
-from algorithms.darning.refine import _tri_angles
 from algorithms.darning.refine_kernels import corner_angles, grid_search, smooth_bad, star_scores, stars, unchangeable
 from algorithms.topology import boundary_loops, halfedges
 
 
 # the numpy versions the compiled kernels replaced, kept here as their references
+def _tri_angles(t: np.ndarray) -> np.ndarray:
+    """(..., 3) corner angles (radians) of triangles given as (..., 3, 3) corner positions."""
+    out = np.empty(t.shape[:-1])
+    for k in range(3):
+        u = t[..., (k + 1) % 3, :] - t[..., k, :]
+        w = t[..., (k + 2) % 3, :] - t[..., k, :]
+        c0 = u[..., 1] * w[..., 2] - u[..., 2] * w[..., 1]
+        c1 = u[..., 2] * w[..., 0] - u[..., 0] * w[..., 2]
+        c2 = u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]
+        out[..., k] = np.arctan2(np.sqrt(c0 * c0 + c1 * c1 + c2 * c2), (u * w).sum(axis=-1))
+    return out
+
+
 def _unchangeable(f, nv, fixed, locked):
     """(M, 3) whether edge k of each patch face (f[:, k] -> f[:, k+1]) can neither split nor flip: a
     hole border edge (an edge of a fixed face), a locked edge, or an edge with one patch face."""

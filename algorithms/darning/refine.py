@@ -785,19 +785,6 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     return np.asarray(new), np.vstack(faces + grow)
 
 
-def _tri_angles(t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(..., 3) corner angles (radians) of triangles given as (..., 3, 3) corner positions."""
-    out = np.empty(t.shape[:-1])
-    for k in range(3):
-        u = t[..., (k + 1) % 3, :] - t[..., k, :]
-        w = t[..., (k + 2) % 3, :] - t[..., k, :]
-        c0 = u[..., 1] * w[..., 2] - u[..., 2] * w[..., 1]
-        c1 = u[..., 2] * w[..., 0] - u[..., 0] * w[..., 2]
-        c2 = u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]
-        out[..., k] = np.arctan2(np.sqrt(c0 * c0 + c1 * c1 + c2 * c2), (u * w).sum(axis=-1))
-    return out
-
-
 def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
                   locked: NDArray[np.int64] | None, free: NDArray[np.bool_], bad: NDArray[np.int64],
                   below: float | None = None) -> tuple[NDArray[np.int64], int]:

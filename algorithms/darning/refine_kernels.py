@@ -20,8 +20,8 @@ _HALF_SQRT3 = float(np.sqrt(3) / 2)
 
 @numba.njit(cache=True)
 def _angles_into(t: np.ndarray, out: np.ndarray) -> None:
-    """out (K, 3): corner angles (radians) of the triangles t (K, 3, 3), as refine._tri_angles:
-    atan2(|u x w|, u . w) with u, w the edges from the corner."""
+    """out (K, 3): corner angles (radians) of the triangles t (K, 3, 3), as the numpy _tri_angles of
+    tests/test_refine_kernels.py: atan2(|u x w|, u . w) with u, w the edges from the corner."""
     for i in range(t.shape[0]):
         for k in range(3):
             k1 = (k + 1) % 3
