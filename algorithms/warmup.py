@@ -64,14 +64,21 @@ def _rbf() -> None:
 
 
 def _angles() -> None:
-    """refine_angles' compiled smoothing of bad triangles (refine_kernels.smooth_bad)."""
+    """refine_angles' compiled smoothing of bad triangles (refine_kernels.smooth_bad) and its grid search
+    for a vertex's best place (refine._move_best: refine_kernels.grid_search)."""
+    import importlib
+
     from .darning.refine_kernels import corner_angles, smooth_bad
+
+    refine = importlib.import_module(".darning.refine", __package__)  # the package exports a function so named
 
     p = np.array([[0.0, 0, 0], [1, 0, 0], [0.5, 0.05, 0], [0.5, 1, 0], [0.5, -1, 0]])
     f = np.array([[0, 1, 2], [0, 2, 3], [2, 1, 3], [1, 0, 4]], dtype=np.int64)
     free = np.array([False, False, True, False, False])
     smooth_bad(p, f, free, np.array([0], dtype=np.int64))
     corner_angles(p, f)
+    star = f[(f == 2).any(axis=1)]
+    refine._move_best(p, star, 2, float(corner_angles(p, star).min()))
 
 
 STEPS: tuple[tuple[str, Callable[[], None]], ...] = (
