@@ -79,3 +79,53 @@ def test_graded_points_split_the_fan_evenly():
     p2 = np.vstack([p, [[-1.0, -1.0, 0]]])
     f2 = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 1]])
     assert R._graded_points(p2, f2, np.zeros(3, dtype=bool), 0, 2) is None
+
+
+def _grid(n: int = 7):
+    """A flat n x n grid of points (z = 0), two faces per cell, wound to face +z."""
+    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+    v = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
+    f = []
+    for i in range(n - 1):
+        for j in range(n - 1):
+            a, b, c, d = i * n + j, i * n + j + 1, (i + 1) * n + j + 1, (i + 1) * n + j
+            f += [(a, b, c), (a, c, d)]
+    return v, np.array(f)
+
+
+def test_folded_pairs_on_a_pushed_through_vertex():
+    v, f = _grid()
+    assert len(R._folded_pairs(v, f)) == 0
+    w = v.copy()
+    w[24, :2] += (1.6, 0.3)  # the centre vertex pushed over its right neighbour: faces turn over
+    pairs = R._folded_pairs(w, f)
+    assert len(pairs) > 0
+    assert (f[pairs] == 24).any(axis=(1, 2)).all()  # every fold has a face at the pushed vertex
+    # a crease that is meant to be sharp is not a fold when it is listed
+    edges = np.unique(np.sort(np.c_[f[pairs[:, 0]], f[pairs[:, 0]][:, [1, 2, 0]]].reshape(-1, 2), axis=1), axis=0)
+    assert len(R._folded_pairs(w, f, ignore=edges)) == 0
+
+
+def test_no_points_into_a_crumple(monkeypatch):
+    """refine_angles inserts no point into the faces of a crumple (bunny-islands' ear tip: points there
+    multiplied into clusters of tiny faces); its moves and collapses unfold it instead."""
+    v, f = _grid()
+    v = v.copy()
+    v[24, :2] += (1.6, 0.3)
+    inner = (v[f][:, :, 0].min(axis=1) >= 1) & (v[f][:, :, 0].max(axis=1) <= 5) & \
+        (v[f][:, :, 1].min(axis=1) >= 1) & (v[f][:, :, 1].max(axis=1) <= 5)
+    inner |= (f == 24).any(axis=1)
+    patch, fixed = f[inner], f[~inner]
+    folded = len(R._folded_pairs(v, patch))
+    seen = []
+    orig = R._insert
+
+    def spy(p, ff, fx, lk, bad, corner, nv):
+        seen.append(ff[bad].copy())
+        return orig(p, ff, fx, lk, bad, corner, nv)
+
+    monkeypatch.setattr(R, "_insert", spy)
+    q = R.refine_angles(v, patch, fixed, movable=np.array([24]))
+    assert folded > 0 and seen
+    assert not any((s == 24).any() for s in seen)  # never a face at the crumpled vertex
+    assert len(R._folded_pairs(q.vertices, q.faces)) <= folded

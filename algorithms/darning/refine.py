@@ -353,7 +353,13 @@ def _refine_region(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[
                 break
         new_pts = np.zeros((0, 3))
         if inserted < limit:
-            new_pts, f = _insert(P, f, fixed, lk, np.flatnonzero(bad), choice, len(P))
+            # no point into a face at a crumple (two faces folded over each other: a thin part's projections
+            # crossed): points there multiply into clusters of tiny faces (bunny-islands' ear tip: 202 -> 1088
+            # edges below 1/5 of the median, 174 points); the moves and collapses unfold it instead (166, 19)
+            crumpled = np.zeros(len(P), dtype=bool)
+            crumpled[f[_folded_pairs(P, f, ignore=lk).ravel()]] = True
+            ins = np.flatnonzero(bad)
+            new_pts, f = _insert(P, f, fixed, lk, ins[~crumpled[f[ins]].any(axis=1)], choice, len(P))
         removed = 0
         if not len(new_pts):  # Ruppert would split the border edge a free vertex encroaches: remove it
             # (not the points inserted here: inserting and removing one could alternate for ever)
@@ -422,18 +428,24 @@ def _split_edge(f: NDArray[np.int64], i: int, e: int, m: int) -> NDArray[np.int6
     return np.vstack([g, [[m, b, c], [m, a, d]]])
 
 
-def _folds(p: NDArray[np.float64], f: NDArray[np.int64], *, cos: float = -0.25) -> int:
-    """The number of edges of ``f`` whose two faces turn more than acos(``cos``) against each other (105
-    deg: a face folded over its neighbour, not a surface bent smoothly; a CAD part's own sharp edges are
-    counted too, the same before and after a trial)."""
+def _folded_pairs(p: NDArray[np.float64], f: NDArray[np.int64], *, cos: float = -0.25,
+                  ignore: NDArray[np.int64] | None = None) -> NDArray[np.int64]:
+    """(K, 2) the two faces of each edge of ``f`` whose faces turn more than acos(``cos``) against each
+    other (105 deg: a face folded over its neighbour, not a surface bent smoothly; a CAD part's own sharp
+    edges count too, except the edges ``ignore`` (E, 2), e.g. the continued creases)."""
     t = p[f]
-    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    n = _cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
     he = halfedges(f)
     key = np.minimum(he[:, 0], he[:, 1]) * len(p) + np.maximum(he[:, 0], he[:, 1])
     o = np.argsort(key, kind="stable")
     pair = np.flatnonzero(key[o][1:] == key[o][:-1])
-    return int((np.einsum("ij,ij->i", n[o[pair] // 3], n[o[pair + 1] // 3]) < cos).sum())
+    a, b = o[pair] // 3, o[pair + 1] // 3
+    turned = np.einsum("ij,ij->i", n[a], n[b]) < cos
+    if ignore is not None and len(ignore):
+        ig = np.asarray(ignore, dtype=np.int64).reshape(-1, 2)
+        turned &= ~np.isin(key[o][pair], np.minimum(ig[:, 0], ig[:, 1]) * len(p) + np.maximum(ig[:, 0], ig[:, 1]))
+    return np.stack([a[turned], b[turned]], axis=1)
 
 
 def _graded_points(p: NDArray[np.float64], f: NDArray[np.int64], keep: NDArray[np.bool_], v: int, k: int
@@ -515,7 +527,7 @@ def _run_trials(trials: list, p: NDArray[np.float64], m: int, ring: NDArray[np.i
                 if before < strict + near:  # a star well above the bound: left as it is (time)
                     _move_best(q, g[rows], int(c), before, grid=11)
         g, _ = relax(q, g, held, locked=lk)
-        if _manifold(np.vstack([held, g])) and _folds(q, np.vstack([held, g])) <= folds:
+        if _manifold(np.vstack([held, g])) and len(_folded_pairs(q, np.vstack([held, g]))) <= folds:
             out.append((_score(q, g, held, lk, strict, hard), q, g, fr, n_new))
     return out
 
@@ -540,7 +552,7 @@ def _polish(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     faces outside its region), and the best one is kept when it improves them (:func:`_pareto`: no
     more faces below ``strict`` and no smaller angle, over the faces that are not forced, one of them
     strictly, so the whole patch improves too) and folds no more faces over their neighbours
-    (:func:`_folds`). Where none does, graded fans at the face's pinned corners (:func:`_graded_points`,
+    (:func:`_folded_pairs`). Where none does, graded fans at the face's pinned corners (:func:`_graded_points`,
     1-4 points) are tried the same way; where none of those does either and the face is below ``hard``
     (default 3/4 of ``strict``: 15 deg for 20), any trial that lifts faces above ``hard`` without
     lowering the smallest angle (:func:`_better`).
@@ -574,7 +586,7 @@ def _polish(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
             held = np.vstack([fixed[np.isin(fixed, at).any(axis=1)], rest[np.isin(rest, at).any(axis=1)]])
             i = int(np.flatnonzero((sub == tri).all(axis=1))[0])
             best = _score(p, sub, held, lk, strict, hard)
-            folds = _folds(p, np.vstack([held, sub]))  # no trial may fold more faces over their neighbours
+            folds = len(_folded_pairs(p, np.vstack([held, sub])))  # no trial may fold more faces over their neighbours
             stuck = unchangeable(sub, len(p), held, lk)
             m = len(p)
             a, b, c = tri
