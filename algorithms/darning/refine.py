@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..topology import edge_table, halfedges
+from ..topology import edge_table, face_adjacency, halfedges
 from .flips import edge_keys_among, flip_passes
 from .refine_kernels import corner_angles as _corner_angles
 from .refine_kernels import grid_search, smooth_bad, unchangeable
@@ -430,22 +430,35 @@ def _split_edge(f: NDArray[np.int64], i: int, e: int, m: int) -> NDArray[np.int6
 
 def _folded_pairs(p: NDArray[np.float64], f: NDArray[np.int64], *, cos: float = -0.25,
                   ignore: NDArray[np.int64] | None = None) -> NDArray[np.int64]:
-    """(K, 2) the two faces of each edge of ``f`` whose faces turn more than acos(``cos``) against each
-    other (105 deg: a face folded over its neighbour, not a surface bent smoothly; a CAD part's own sharp
-    edges count too, except the edges ``ignore`` (E, 2), e.g. the continued creases)."""
+    """(K, 2) the two faces of each edge of ``f`` (topology.face_adjacency) whose faces turn more than
+    acos(``cos``) against each other (105 deg: a face folded over its neighbour, not a surface bent
+    smoothly; a CAD part's own sharp edges count too, except the edges ``ignore`` (E, 2), e.g. the
+    continued creases)."""
     t = p[f]
     n = _cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
-    he = halfedges(f)
-    key = np.minimum(he[:, 0], he[:, 1]) * len(p) + np.maximum(he[:, 0], he[:, 1])
-    o = np.argsort(key, kind="stable")
-    pair = np.flatnonzero(key[o][1:] == key[o][:-1])
-    a, b = o[pair] // 3, o[pair + 1] // 3
-    turned = np.einsum("ij,ij->i", n[a], n[b]) < cos
-    if ignore is not None and len(ignore):
-        ig = np.asarray(ignore, dtype=np.int64).reshape(-1, 2)
-        turned &= ~np.isin(key[o][pair], np.minimum(ig[:, 0], ig[:, 1]) * len(p) + np.maximum(ig[:, 0], ig[:, 1]))
-    return np.stack([a[turned], b[turned]], axis=1)
+    pairs = face_adjacency(f, manifold_only=False)
+    pairs = pairs[np.einsum("ij,ij->i", n[pairs[:, 0]], n[pairs[:, 1]]) < cos]
+    if ignore is not None and len(ignore) and len(pairs):
+        ig = np.sort(np.asarray(ignore, dtype=np.int64).reshape(-1, 2), axis=1)
+        fa, fb = f[pairs[:, 0]], f[pairs[:, 1]]
+        common = (fa[:, :, None] == fb[:, None, :]).any(axis=2)  # the shared edge's two corners
+        two = common.sum(axis=1) == 2
+        shared = np.zeros((len(pairs), 2), dtype=np.int64)
+        shared[two] = np.sort(fa[two][common[two]].reshape(-1, 2), axis=1)
+        nv = len(p)
+        listed = np.isin(shared[:, 0] * nv + shared[:, 1], ig[:, 0] * nv + ig[:, 1]) & two
+        pairs = pairs[~listed]
+    return pairs
+
+
+def _split_face(f: NDArray[np.int64], i: int, m: int) -> NDArray[np.int64]:
+    """The faces with face i split in three at the new vertex m (face i keeps its place, the other two
+    go last), orientation kept."""
+    a, b, c = f[i]
+    g = np.vstack([f, [[b, c, m], [c, a, m]]])
+    g[i] = (a, b, m)
+    return g
 
 
 def _graded_points(p: NDArray[np.float64], f: NDArray[np.int64], keep: NDArray[np.bool_], v: int, k: int
@@ -501,10 +514,8 @@ def _insert_points(p: NDArray[np.float64], f: NDArray[np.int64], x: NDArray[np.f
         n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
         d = np.einsum("ij,ij->i", y - t[:, 0], n)
         h = int(np.argmin(np.abs(d)))
-        i, m = int(cand[h]), len(p)
+        f = _split_face(f, int(cand[h]), len(p))
         p = np.vstack([p, y - d[h] * n[h]])
-        i0, i1, i2 = f[i]
-        f = np.vstack([f[:i], [[i0, i1, m]], f[i + 1:], [[i1, i2, m], [i2, i0, m]]])
     return p, f
 
 
@@ -589,18 +600,15 @@ def _polish(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
             folds = len(_folded_pairs(p, np.vstack([held, sub])))  # no trial may fold more faces over their neighbours
             stuck = unchangeable(sub, len(p), held, lk)
             m = len(p)
-            a, b, c = tri
-            split3 = np.vstack([sub[:i], [[a, b, m]], sub[i + 1:], [[b, c, m], [c, a, m]]])
             trials = [(p.copy(), sub.copy(), free, 0),
-                      (np.vstack([p, p[tri].mean(axis=0)]), split3, np.r_[free, True], 1)]
+                      (np.vstack([p, p[tri].mean(axis=0)]), _split_face(sub, i, m), np.r_[free, True], 1)]
             for e in range(3):
                 g = None if stuck[i, e] else _split_edge(sub, i, e, m)
                 if g is not None:
                     trials.append((np.vstack([p, (p[tri[e]] + p[tri[(e + 1) % 3]]) / 2]), g, np.r_[free, True], 1))
-            forced = _bad_triangles(p, sub, held, lk, strict)[0]
             fans = [(v, k) for v in tri[~free[tri]] for k in (1, 2, 3, 4)]  # graded fans at its pinned corners
 
-            def fan(v: int, k: int) -> tuple | None:
+            def fan(v: int, k: int, forced: NDArray[np.bool_]) -> tuple | None:
                 x = _graded_points(p, sub, forced, int(v), k)
                 got = None if x is None else _insert_points(p, sub, x)
                 return None if got is None else (got[0], got[1], np.r_[free, np.ones(k, dtype=bool)], k)
@@ -611,7 +619,8 @@ def _polish(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
             done = _run_trials(trials, *args)
             chosen = _pick(done, best, _pareto)
             if chosen is None:
-                fans = _run_trials([t for t in (fan(v, k) for v, k in fans) if t is not None], *args)
+                forced = _bad_triangles(p, sub, held, lk, strict)[0]  # the fans keep the forced faces
+                fans = _run_trials([t for t in (fan(v, k, forced) for v, k in fans) if t is not None], *args)
                 chosen = _pick(fans, best, _pareto) or _pick(done + fans, best, _better)
             if chosen is not None:
                 _, p, g, free, n_new = chosen
