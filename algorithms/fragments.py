@@ -52,12 +52,14 @@ def _fragments(model: Icadm) -> list[tuple[list[int], NDArray[np.int64]]]:
     return [([ids[k] for k in np.flatnonzero(lab == i)], faces[lab == i]) for i in range(n)]
 
 
-def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
-                     normals: NDArray[np.float64]) -> Attached:
+def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDArray[np.float64],
+                     vertices: NDArray[np.float64] | None = None) -> Attached:
     """Walk every set-aside fragment that hangs at vertices of the hole polygons into them.
 
-    polygons: hole polygons (surface on their left). normals: vertex normals of the working
-    vertex array (the model's vertices first). A fragment is attached when it is an oriented disk
+    polygons: hole polygons (surface on their left). normals, vertices: normals and positions of
+    the working vertex array (the model's vertices first; positions default to the model's). A
+    fragment hanging at one vertex that the polygons pass more than once goes into the pass whose
+    gap it lies in (``_sector``). A fragment is attached when it is an oriented disk
     (one boundary loop, Euler characteristic 1) whose vertices used by the kept surface lie on its
     loop and each occur exactly once in the polygons; others stay set aside (noted). Hanging at one
     vertex, its loop is walked into the polygon (the pipeline bridges the pinch,
@@ -76,7 +78,7 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
     frags = _fragments(model)
     if not frags:
         return Attached(polys, np.zeros((0, 3), dtype=np.int64), source=tuple(range(len(polys))))
-    V = model.mesh.vertices
+    V = model.mesh.vertices if vertices is None else vertices
     origin = model.vertex_origin if model.vertex_origin is not None else np.arange(model.mesh.n_vertices)
     used = np.zeros(len(V), dtype=bool)
     used[np.asarray(origin)[model.mesh.faces.ravel()]] = True
@@ -91,6 +93,16 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
         return where
 
     taken: set[int] = set()  # one fragment per vertex: a second one there would need its own sector
+    # fragments at a vertex the holes pass more than once go last: a chain of fragments (touching
+    # each other at vertices) must lie in one hole, so such a fragment joins the hole its chained
+    # neighbours went into, if any
+    first = occurrences()
+
+    def passed_often(fragment: tuple[list[int], NDArray[np.int64]]) -> bool:
+        at = [int(x) for x in np.unique(fragment[1]) if used[x]]
+        return len(at) == 1 and len(first.get(at[0], [])) > 1
+
+    frags.sort(key=passed_often)
     for fids, faces in frags:
         attach = [int(x) for x in np.unique(faces) if used[x]]
         label = f"fragment of face(s) {fids}"
@@ -100,6 +112,15 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
         loop = [int(x) for x in boundary_loops(faces)[0]]
         where = occurrences()
         spots = [where.get(a, []) for a in attach]
+        at_pass: int | None = None  # where in its polygon the fragment goes, when it is passed more than once
+        if len(attach) == 1 and len(spots[0]) > 1:
+            # the holes pass the vertex more than once (a pinch of the kept surface, or the ends of
+            # two walks): the fragment goes into the pass whose gap it lies in, in the hole its
+            # chained neighbours went into if they did
+            own = set(np.unique(faces).tolist()) - set(attach)
+            chained = [w for w in spots[0] if own & set(polys[w[0]])]
+            k0, m0, at_pass = _sector(V, normals, polys, chained or spots[0], faces)
+            spots = [[(k0, m0)]]
         holes = sorted({w[0][0] for w in spots if len(w) == 1})
         if not attach or any(len(w) != 1 for w in spots) or taken & set(attach) or len(holes) > len(attach):
             notes.append(f"{label} left aside: not hanging at hole vertices each passed once")
@@ -120,7 +141,7 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]],
             a, m = attach[0], to_hole[attach[0]]
             s = loop.index(a)
             walk = loop[s + 1:] + loop[:s]  # f1..fk: the loop after the attachment vertex
-            i = polys[k].index(m)
+            i = polys[k].index(m) if at_pass is None else at_pass
             polys[k] = polys[k][:i + 1] + tuple(walk) + (m,) + polys[k][i + 1:]
             at.append(m)
         else:  # hanging at several hole vertices: the fragment cuts its hole into pieces, or joins
@@ -187,6 +208,39 @@ def _walk_around(polygons: list[tuple[int, ...]], loop: list[int], attach: set[i
     return out
 
 
+def _sector(vertices: NDArray[np.float64], normals: NDArray[np.float64], polygons: list[tuple[int, ...]],
+            spots: list[tuple[int, int]], faces: NDArray[np.int64]) -> tuple[int, int, int]:
+    """Of the passes ``spots`` ((polygon, vertex)) of the walks through one vertex m, the one whose gap
+    the fragment ``faces`` lies in, as (polygon, m, position in the polygon).
+
+    A walk arriving from p and leaving to q has the surface on its left, so in the tangent plane
+    at m (normal n) the gap is the wedge swept counter-clockwise from p - m to q - m. The
+    fragment's direction is its centroid - m; the pass whose wedge holds it deepest (the larger of
+    its two angles to the wedge's sides, negative outside) is taken."""
+    best: tuple[float, tuple[int, int, int]] | None = None
+    centroid = vertices[faces].reshape(-1, 3).mean(axis=0)
+    for k, m in spots:
+        poly = polygons[k]
+        n = normals[m] / max(float(np.linalg.norm(normals[m])), 1e-300)
+        e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(n, e1)
+
+        def ang(x: NDArray[np.float64]) -> float:
+            d = x - vertices[m]
+            return float(np.arctan2(d @ e2, d @ e1))
+
+        for i in (j for j, x in enumerate(poly) if x == m):
+            a0 = ang(vertices[poly[i - 1]])
+            wedge = (ang(vertices[poly[(i + 1) % len(poly)]]) - a0) % (2 * np.pi)
+            t = (ang(centroid) - a0) % (2 * np.pi)
+            depth = min(t, wedge - t)  # > 0 inside the wedge
+            if best is None or depth > best[0]:
+                best = (depth, (k, m, i))
+    assert best is not None
+    return best[1]
+
+
 def _pinch(polygon: tuple[int, ...], fragment_vertices: dict[int, NDArray[np.float64]]) -> tuple[int, int] | None:
     """Positions (i, j) of the two passes of a fragment vertex the walk passes twice, or None."""
     seen: dict[int, int] = {}
@@ -215,18 +269,24 @@ def fragment_bridge(vertices: NDArray[np.float64], normals: NDArray[np.float64],
     pos: dict[int, list[int]] = {}
     for k, v in enumerate(polygon):
         pos.setdefault(v, []).append(k)
-    twice = [m for m in attached.attach if len(pos.get(m, [])) == 2]
-    if not twice:
-        return None
     n = len(polygon)
-    p, q = pos[twice[0]]
-    inner = list(range(p + 1, q))
-    outer = [k % n for k in range(q + 1, p + n)]
-    if not all(polygon[k] in attached.normals for k in inner):
-        inner, outer = outer, inner
-    frag = [k for k in inner if polygon[k] in attached.normals]
-    rest = [k for k in outer if polygon[k] != twice[0]]
-    if not frag or not rest:
+    # two consecutive passes of an attachment vertex with only fragment vertices between them (the
+    # vertex may be passed more often: a pinch of the kept surface there too)
+    inner: list[int] = []
+    for m in attached.attach:
+        ks = pos.get(m, [])
+        for p, q in zip(ks, ks[1:] + [ks[0] + n]) if len(ks) > 1 else ():
+            between = [k % n for k in range(p + 1, q)]
+            if between and all(polygon[k] in attached.normals for k in between):
+                inner, twice = between, m
+                break
+        if inner:
+            break
+    if not inner:
+        return None
+    frag = inner
+    rest = [k for k in range(n) if k not in set(inner) and polygon[k] != twice]
+    if not rest:
         return None
     fr = polygon_frame(vertices, normals, polygon)
     a, b = np.asarray(frag), np.asarray(rest)

@@ -421,7 +421,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         holes = walk_holes(loops, bridges, chains)
     # fragments set aside by normalisation that hang at one vertex of a hole: walked into the hole,
     # their faces kept (algorithms.fragments)
-    attached = attach_fragments(model, [h.polygon for h in holes], work.N())
+    attached = attach_fragments(model, [h.polygon for h in holes], work.N(), work.V())
     if len(attached.faces):
         work.faces.append(attached.faces)
         work.normals[0] = work.normals[0].copy()

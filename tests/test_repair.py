@@ -21,10 +21,17 @@ def face_keys(v, f):
     return {row.tobytes() for row in t}
 
 
-def assert_input_kept(model: Icadm, out: Mesh):
+def assert_input_kept(model: Icadm, out: Mesh, *, fragments: bool = False):
+    """Every face of the model is in the output, with its vertex coordinates; with ``fragments``,
+    so is every fragment normalisation set aside (the repair walks them back in:
+    algorithms.fragments; a scan's loose pieces, as on the real bunny, may stay aside, noted)."""
     kin = face_keys(model.mesh.vertices, model.mesh.faces)
     kout = face_keys(out.vertices, out.faces)
     assert kin <= kout, f"{len(kin - kout)} input faces changed or lost"
+    frag = [s.vertices for s in model.set_aside if s.reason.startswith("fragment")]
+    if fragments and frag:
+        lost = face_keys(model.mesh.vertices, np.array(frag)) - kout
+        assert not lost, f"{len(lost)} of {len(frag)} set-aside fragment faces lost"
 
 
 def run_demo(name, **kw):
@@ -216,6 +223,69 @@ def test_fragment_touching_only_at_a_vertex_is_kept(flip, chain):
     assert np.abs(np.linalg.norm(res.mesh.vertices, axis=1) - 1).max() < 0.1
     if chain:  # the chain of two fragments cuts the hole in two before any bridge
         assert sum(h.origin == "loop" for h in res.holes) == 2
+
+
+def sphere_with_pinched_fragment(sign: float):
+    """An icosphere with a hole around vertex 0, crossed by a bar of faces through vertex 0 that
+    keeps two of its ring faces, on opposite sides: vertex 0 is pinched (normalisation splits it)
+    and the hole's one walk passes it twice. A triangle hangs at vertex 0 in the gap on the
+    ``sign`` side of the bar (the fragment is the last face). Returns (vertices, faces)."""
+    import trimesh
+
+    s = trimesh.creation.icosphere(subdivisions=3)
+    v, f = np.asarray(s.vertices), np.asarray(s.faces)
+    t = np.cross(v[0], [0.0, 0.0, 1.0])
+    t /= np.linalg.norm(t)
+    d = v[f].mean(axis=1) - v[0]
+    bar = np.abs(d @ t) < 0.02 + 0.3 * np.linalg.norm(d, axis=1)
+    kept = f[(np.linalg.norm(d, axis=1) >= 0.42) | bar]
+    side, along = sign * t, np.cross(t, v[0])  # the bar runs along ``along``, the gaps lie at +-t
+    p, q = (v[0] + 0.12 * side + e * 0.03 * along for e in (1, -1))
+    V = np.vstack([v, p / np.linalg.norm(p), q / np.linalg.norm(q)])
+    frag = np.array([[0, len(v), len(v) + 1]])
+    return V, np.vstack([kept, frag])
+
+
+@pytest.mark.parametrize("at,expect", [((0.3, 0.2), 0), ((-0.2, -0.3), 1), ((0.1, 0.4), 0)])
+def test_sector_of_a_fragment(at, expect):
+    """Two walks pass vertex 0 of a plane (normal +z, surface on their left): one turns through the
+    quadrant x, y > 0 (arriving from (1, 0), leaving to (0, 1)), the other through x, y < 0. A
+    fragment goes to the walk whose gap holds its centroid."""
+    from algorithms.fragments import _sector
+
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0], [*at, 0], [at[0] + 0.1, at[1], 0]], float)
+    N = np.tile([0.0, 0.0, 1.0], (len(V), 1))
+    polys = [(1, 0, 2, 9), (3, 0, 4, 8)]
+    k, m, i = _sector(V, N, polys, [(0, 0), (1, 0)], np.array([[0, 5, 6]]))
+    assert (k, m, i) == (expect, 0, 1)
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_fragment_at_a_vertex_the_walk_passes_twice(sign):
+    """The walk passes the fragment's vertex twice (each copy of it turns around one end of the
+    bar, so each pass's gap wedge holds both gaps): the fragment is walked in at one of them
+    (fragments._sector) and kept, where before it was left aside and lost."""
+    from algorithms.boundary import vertex_normals
+    from algorithms.fragments import attach_fragments
+    from algorithms.topology import boundary_loops
+
+    v, f = sphere_with_pinched_fragment(sign)
+    model = normalize(v, f)
+    assert [s.face for s in model.set_aside] == [len(f) - 1]
+    loops = [tuple(int(x) for x in lp) for lp in boundary_loops(model.mesh.faces)]
+    origin = np.asarray(model.vertex_origin)
+    copies = [k for k, x in enumerate(loops[0]) if origin[x] == 0]
+    assert len(loops) == 1 and len(copies) == 2  # one walk, through both copies of vertex 0
+    att = attach_fragments(model, loops, vertex_normals(model.mesh))
+    assert att.input_faces == (len(f) - 1,) and len(att.attach) == 1
+    poly = att.polygons[0]
+    i = poly.index(att.attach[0])
+    assert set(origin[[x for x in poly[i + 1:i + 3]]]) == {len(v) - 2, len(v) - 1}
+    res = repair(model)
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 1 and t.genus == 0
+    assert face_keys(v, f) <= face_keys(res.mesh.vertices, res.mesh.faces)
+    assert np.abs(np.linalg.norm(res.mesh.vertices, axis=1) - 1).max() < 0.1
 
 
 @pytest.mark.parametrize("flip", [False, True])

@@ -32,7 +32,9 @@ def test_slab_across_the_part_gives_a_manifold_surface():
     assert edge_table(res.mesh.faces).counts.max() == 2
     t = topology(res.mesh.faces)
     assert t.watertight and t.oriented and t.components == 1 and t.genus == 9
-    assert_input_kept(model, res.mesh)
+    # the slab leaves a row of one-face fragments, chained at their corners, along a cut wall; the
+    # first hangs at the end of a tunnel bridge, which two walks pass: it joins its neighbours' walk
+    assert_input_kept(model, res.mesh, fragments=True)
 
 
 def test_fragment_between_two_holes_is_kept():
