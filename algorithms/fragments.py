@@ -15,6 +15,12 @@ passes a vertex twice (``fragment_bridge``: from a fragment vertex across the ga
 aimed along the border frames' outward vectors), and darns the halves; the fragment's faces become
 faces of the output with their vertices unchanged. The fragment's winding follows the surface: it
 is reversed (recorded) when its normal disagrees with the surface normal at ``m``.
+
+Where the walks pass ``m`` more than once (a pinch of the kept surface, the end of a bridge that two
+walks pass, a bare bridge walked both ways), the fragment joins the pass whose gap holds it: the
+gap of a pass from p to q is the wedge swept counter-clockwise from p - m to q - m in the tangent
+plane at ``m`` (``_sector``). At a sharp edge a fragment standing on the other face projects onto
+the tangent plane poorly, and the choice can be wrong: the fill around it then bulges.
 """
 
 from __future__ import annotations
@@ -111,25 +117,31 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
             continue
         loop = [int(x) for x in boundary_loops(faces)[0]]
         where = occurrences()
-        spots = [where.get(a, []) for a in attach]
-        at_pass: int | None = None  # where in its polygon the fragment goes, when it is passed more than once
-        if len(attach) == 1 and len(spots[0]) > 1:
-            # the holes pass the vertex more than once (a pinch of the kept surface, or the ends of
-            # two walks): the fragment goes into the pass whose gap it lies in, in the hole its
-            # chained neighbours went into if they did
-            own = set(np.unique(faces).tolist()) - set(attach)
-            chained = [w for w in spots[0] if own & set(polys[w[0]])]
-            k0, m0, at_pass = _sector(V, normals, polys, chained or spots[0], faces)
-            spots = [[(k0, m0)]]
-        holes = sorted({w[0][0] for w in spots if len(w) == 1})
-        if not attach or any(len(w) != 1 for w in spots) or taken & set(attach) or len(holes) > len(attach):
-            notes.append(f"{label} left aside: not hanging at hole vertices each passed once")
+        if not attach or any(not where.get(a) for a in attach) or taken & set(attach):
+            notes.append(f"{label} left aside: not hanging at hole vertices")
             continue
         if any(a not in loop for a in attach):
             notes.append(f"{label} left aside: an attachment vertex is inside it")
             continue
-        k = spots[0][0][0]
-        to_hole = {a: w[0][1] for a, w in zip(attach, spots)}  # fragment vertex -> the hole's vertex there
+        # the pass of the holes' walks each attachment vertex joins: the only one, or, where the
+        # holes pass the vertex more than once (a pinch of the kept surface, the ends of two walks,
+        # a bare bridge), the one whose gap holds the fragment, in the hole its chained neighbours
+        # went into if they did
+        own = set(np.unique(faces).tolist()) - set(attach)
+        passes: dict[int, tuple[int, int]] = {}  # fragment vertex -> (polygon, position) of its pass
+        for a in attach:
+            spots = where[a]
+            if len(spots) == 1:
+                k, m = spots[0]
+                passes[a] = (k, polys[k].index(m))
+            else:
+                s = loop.index(a)
+                toward = V[[loop[s - 1], loop[(s + 1) % len(loop)]]].mean(axis=0)
+                chained = [w for w in spots if own & set(polys[w[0]])]
+                k, m, i = _sector(V, normals, polys, chained or spots, toward)
+                passes[a] = (k, i)
+        to_hole = {a: polys[k][i] for a, (k, i) in passes.items()}  # fragment vertex -> the hole's vertex there
+        holes = sorted({k for k, _ in passes.values()})
         t = V[faces]
         fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
         flip = bool(fn @ normals[list(to_hole.values())].sum(axis=0) < 0)
@@ -138,20 +150,23 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
             loop = loop[::-1]
             fn = -fn
         if len(attach) == 1:
-            a, m = attach[0], to_hole[attach[0]]
+            a = attach[0]
+            (k, i), m = passes[a], to_hole[a]
             s = loop.index(a)
             walk = loop[s + 1:] + loop[:s]  # f1..fk: the loop after the attachment vertex
-            i = polys[k].index(m) if at_pass is None else at_pass
             polys[k] = polys[k][:i + 1] + tuple(walk) + (m,) + polys[k][i + 1:]
             at.append(m)
         else:  # hanging at several hole vertices: the fragment cuts its hole into pieces, or joins
             # the holes it touches (a piece of surface spanning between them, like a wide bridge)
             walk = [x for x in loop if x not in to_hole]
-            pieces = _walk_around([polys[h] for h in holes], [to_hole.get(x, x) for x in loop], set(to_hole.values()))
+            sub = {h: j for j, h in enumerate(holes)}
+            pieces = _walk_around([polys[h] for h in holes], [to_hole.get(x, x) for x in loop],
+                                  set(to_hole.values()),
+                                  {to_hole[a]: (sub[k], i) for a, (k, i) in passes.items()})
             for h in holes:
                 polys[h] = ()  # () : replaced (or closed by the fragment), dropped below
             polys += pieces
-            src += [src[k]] * len(pieces)
+            src += [src[passes[attach[0]][0]]] * len(pieces)
             # joining holes at single vertices the walk passes them twice: bridged like a single
             # attachment's pinch (fragment_bridge)
             at += [m for m in to_hole.values() if any(q.count(m) > 1 for q in pieces)]
@@ -184,41 +199,55 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
     return Attached(pieces, faces_out, tuple(in_ids), tuple(flips), nrm_of, tuple(notes), tuple(source), tuple(at))
 
 
-def _walk_around(polygons: list[tuple[int, ...]], loop: list[int], attach: set[int]) -> list[tuple[int, ...]]:
+def _walk_around(polygons: list[tuple[int, ...]], loop: list[int], attach: set[int],
+                 passes: dict[int, tuple[int, int]] | None = None) -> list[tuple[int, ...]]:
     """The holes left when a fragment whose boundary ``loop`` (positive, attachment vertices already
     numbered as the polygons') touches ``polygons`` at the vertices ``attach``: the boundary of
     surface + fragment, walked with both on the left. At an attachment vertex a walk arriving along
     the polygon leaves along the fragment's loop and one arriving along the loop leaves along the
-    polygon (the rule of a single attachment vertex, applied at each). Two-vertex walks (a hole edge
-    and a fragment edge between the same two vertices: they become one inner edge) are dropped."""
-    nxt = {"p": {a: b for p in polygons for a, b in zip(p, p[1:] + p[:1])},
-           "f": {a: b for a, b in zip(loop, loop[1:] + loop[:1])}}
-    done: set[tuple[str, int]] = set()
+    polygon (the rule of a single attachment vertex, applied at each). ``passes``: for each
+    attachment vertex, (polygon, position) of the pass the fragment joins there, where the
+    polygons pass it more than once (default: its one pass); the others walk on. Two-vertex walks
+    (a hole edge and a fragment edge between the same two vertices: they become one inner edge)
+    are dropped."""
+    if passes is None:
+        passes = {v: (k, i) for k, p in enumerate(polygons) for i, v in enumerate(p) if v in attach}
+    joins = set(passes.values())
+    nxt_f = {a: b for a, b in zip(loop, loop[1:] + loop[:1])}
+    done: set[tuple[str, object]] = set()
     out: list[tuple[int, ...]] = []
-    for dart in [("p", v) for p in polygons for v in p] + [("f", v) for v in loop]:
+    darts: list[tuple[str, object]] = [("p", (k, i)) for k, p in enumerate(polygons) for i in range(len(p))]
+    for dart in darts + [("f", v) for v in loop]:
         walk: list[int] = []
         while dart not in done:
             done.add(dart)
-            side, v = dart
-            walk.append(v)
-            w = nxt[side][v]
-            dart = ("f" if side == "p" else "p", w) if w in attach else (side, w)
+            side, key = dart
+            if side == "p":  # at position i of polygon k, leaving along the polygon
+                k, i = key  # type: ignore[misc]
+                walk.append(polygons[k][i])
+                j = (i + 1) % len(polygons[k])
+                dart = ("f", polygons[k][j]) if (k, j) in joins else ("p", (k, j))
+            else:  # at a loop vertex, leaving along the fragment's loop
+                walk.append(key)  # type: ignore[arg-type]
+                w = nxt_f[key]  # type: ignore[index]
+                dart = ("p", passes[w]) if w in passes else ("f", w)
         if len(walk) >= 3:
             out.append(tuple(walk))
     return out
 
 
 def _sector(vertices: NDArray[np.float64], normals: NDArray[np.float64], polygons: list[tuple[int, ...]],
-            spots: list[tuple[int, int]], faces: NDArray[np.int64]) -> tuple[int, int, int]:
+            spots: list[tuple[int, int]], toward: NDArray[np.float64]) -> tuple[int, int, int]:
     """Of the passes ``spots`` ((polygon, vertex)) of the walks through one vertex m, the one whose gap
-    the fragment ``faces`` lies in, as (polygon, m, position in the polygon).
+    holds the fragment, as (polygon, m, position in the polygon).
 
     A walk arriving from p and leaving to q has the surface on its left, so in the tangent plane
     at m (normal n) the gap is the wedge swept counter-clockwise from p - m to q - m. The
-    fragment's direction is its centroid - m; the pass whose wedge holds it deepest (the larger of
-    its two angles to the wedge's sides, negative outside) is taken."""
+    fragment's direction at m is ``toward`` - m (the midpoint of its loop's two neighbours of m);
+    the pass whose wedge holds it deepest (the smaller of its angles to the wedge's two sides,
+    negative outside) is taken."""
     best: tuple[float, tuple[int, int, int]] | None = None
-    centroid = vertices[faces].reshape(-1, 3).mean(axis=0)
+    centroid = np.asarray(toward, dtype=np.float64)
     for k, m in spots:
         poly = polygons[k]
         n = normals[m] / max(float(np.linalg.norm(normals[m])), 1e-300)

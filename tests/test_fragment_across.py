@@ -35,6 +35,17 @@ def test_walk_around_splits_a_square_hole():
     assert _walk_around([(0, 1, 2), (5, 6, 7)], [0, 9, 5, 8], {0, 5}) == [(0, 1, 2, 0, 9, 5, 6, 7, 5, 8)]
 
 
+def test_walk_around_a_vertex_passed_twice():
+    # the hole 0-1-2-0-3-4 passes vertex 0 twice (a pinch); a triangle fragment 2 -> 9 -> 0 hangs at
+    # 2 and 0. Joining the first pass of 0, it closes the gap 0-1-2 and the pinch stays in the rest;
+    # joining the second, its edge 0 -> 2 meets the hole's edge 2 -> 0 (one inner edge) and one walk
+    # is left, through both passes
+    assert _walk_around([(0, 1, 2, 0, 3, 4)], [2, 9, 0], {0, 2}, {0: (0, 0), 2: (0, 2)}) == [
+        (0, 1, 2, 9), (2, 0, 3, 4, 0)]
+    assert _walk_around([(0, 1, 2, 0, 3, 4)], [2, 9, 0], {0, 2}, {0: (0, 3), 2: (0, 2)}) == [
+        (0, 1, 2, 9, 0, 3, 4)]
+
+
 def test_fragment_touching_two_border_vertices_is_kept():
     case = _torus_case()
     model = normalize(case.incomplete.vertices, case.incomplete.faces)

@@ -250,13 +250,13 @@ def sphere_with_pinched_fragment(sign: float):
 def test_sector_of_a_fragment(at, expect):
     """Two walks pass vertex 0 of a plane (normal +z, surface on their left): one turns through the
     quadrant x, y > 0 (arriving from (1, 0), leaving to (0, 1)), the other through x, y < 0. A
-    fragment goes to the walk whose gap holds its centroid."""
+    fragment goes to the walk whose gap holds it."""
     from algorithms.fragments import _sector
 
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0], [*at, 0], [at[0] + 0.1, at[1], 0]], float)
     N = np.tile([0.0, 0.0, 1.0], (len(V), 1))
     polys = [(1, 0, 2, 9), (3, 0, 4, 8)]
-    k, m, i = _sector(V, N, polys, [(0, 0), (1, 0)], np.array([[0, 5, 6]]))
+    k, m, i = _sector(V, N, polys, [(0, 0), (1, 0)], V[[5, 6]].mean(axis=0))
     assert (k, m, i) == (expect, 0, 1)
 
 
