@@ -33,6 +33,7 @@ from .bridge_graph import (
     split_polygon,
     walk_holes,
 )
+from .bridges import loop_radius
 from .creases import CreaseEnds, Surface, crease_corner, crease_ends, crease_line, crease_split, hermite
 from .fragments import Attached, attach_fragments, fragment_bridge
 from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
@@ -371,13 +372,19 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             lc_used = lc_used or tl.lc
             lines += list(tl.all_lines)
             tunnel_note = tl.note
-            trial = GraphState(state.vertices, loop_of, state.loop_sizes,
-                               replace(rules, neighbourhood=params.neighbourhood_factor * (tl.lc or lc_for_rules)))
+            wide = replace(rules, neighbourhood=params.neighbourhood_factor * (tl.lc or lc_for_rules))
+            trial = GraphState(state.vertices, loop_of, state.loop_sizes, wide)
             for k in state.kept:
                 trial.add(k)
             by_pair: dict[tuple[int, int], list[tuple[Bridge, ForceLine]]] = {}
             for b, ln in as_bridges(list(tl.lines), "tunnel"):
                 n_arrived += 1
+                # the two bridges of a tunnel join the loops at two places around them: ends closer
+                # than the smaller loop's mean radius duplicate (a wide L_c must not make every
+                # line between two small loops one neighbourhood)
+                ra, rb = (loop_radius(frames[loop_of[v][0]]) for v in (b.start, b.end))
+                trial.rules = replace(wide, neighbourhood=min(wide.neighbourhood,
+                                                              params.neighbourhood_factor * min(ra, rb)))
                 why = trial.conflict(b)
                 if why is None:
                     trial.add(b)

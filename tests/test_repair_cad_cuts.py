@@ -12,6 +12,7 @@ import numpy as np
 from conftest import data_file
 from test_repair import assert_input_kept
 
+from algorithms.boundary import summarize
 from algorithms.cases import cut, face_centroids
 from algorithms.io import load_raw
 from algorithms.mesh import Mesh
@@ -54,3 +55,35 @@ def test_fragment_between_two_holes_is_kept():
     t = topology(res.mesh.faces)
     assert t.watertight and t.components == 1 and t.genus == 9
     assert_input_kept(model, res.mesh)
+
+
+def test_tunnel_between_two_small_loops_keeps_two_bridges():
+    """A slab cuts the part through a through-hole: the hole's wall comes back as two loops of
+    radius about 0.4 that 12 force lines join, the best in both directions (a lost handle). The
+    part's boundary is coarse (mean edge 0.54), so the duplicate-bridge neighbourhood of the
+    island graph (10 edges: 5.4, most of the part) made every second line a duplicate of the first
+    and the tunnel was dropped with one bridge. Two bridges of a tunnel now duplicate only within
+    the smaller loop's mean radius. (The truth has genus 9; two other lost handles, whose lines are
+    beaten by lines across their own holes, are still not found: genus 7.)"""
+    from algorithms.bridges import loop_radius
+
+    part = Mesh(*load_raw(data_file("featuretype.stl")))
+    n = np.array([0.3899871822577574, 0.19274635020369008, -0.9004214802845448])
+    case = cut(part, np.abs(face_centroids(part) @ n + 0.1595052211916601) < 0.25290602953215924 / 2,
+               name="featuretype slab through a hole", description="")
+    model = normalize(case.incomplete.vertices, case.incomplete.faces)
+    before = topology(model.mesh.faces)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    tunnels = [b for b in res.bridges if b.kind == "tunnel"]
+    assert len(tunnels) == 2
+    frames = {v: f for f in summarize(model).loops for v in f.vertices}
+    (fa, fb), (ga, gb) = ((frames[b.start], frames[b.end]) for b in tunnels)
+    assert {id(fa), id(fb)} == {id(ga), id(gb)} and fa is not fb  # both join the same two loops
+    radius = min(loop_radius(fa), loop_radius(fb))
+    assert 0.3 < radius < 0.5
+    V = model.mesh.vertices
+    ends = [{id(frames[v]): V[v] for v in (b.start, b.end)} for b in tunnels]
+    assert all(np.linalg.norm(ends[0][k] - ends[1][k]) >= radius for k in (id(fa), id(fb)))
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 1 and t.genus == before.genus + 1 == 7
+    assert_input_kept(model, res.mesh, fragments=True)
