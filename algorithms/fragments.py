@@ -64,13 +64,13 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
 
     polygons: hole polygons (surface on their left). normals, vertices: normals and positions of
     the working vertex array (the model's vertices first; positions default to the model's). A
-    fragment hanging at one vertex that the polygons pass more than once goes into the pass whose
-    gap it lies in (``_sector``). A fragment is attached when it is an oriented disk
-    (one boundary loop, Euler characteristic 1) whose vertices used by the kept surface lie on its
-    loop and each occur exactly once in the polygons; others stay set aside (noted). Hanging at one
-    vertex, its loop is walked into the polygon (the pipeline bridges the pinch,
-    ``fragment_bridge``); at several (a triangle left across a hole by a cut, its corners on the
-    hole's border), it cuts the polygon into the holes around it, and touching several holes it
+    fragment is attached when it is an oriented disk (one boundary loop, Euler characteristic 1)
+    whose vertices used by the kept surface lie on its loop and on the polygons; others stay set
+    aside (noted). Where the polygons pass such a vertex more than once, the fragment joins the
+    pass whose gap holds it (``_sector``), in the hole its chained neighbours went into if they
+    did. Hanging at one vertex, its loop is walked into the polygon (the pipeline bridges the
+    pinch, ``fragment_bridge``); at several (a triangle left across a hole by a cut, its corners on
+    the hole's border), it cuts the polygon into the holes around it, and touching several holes it
     joins them (``_walk_around``).
     """
     polys = [tuple(int(x) for x in p) for p in polygons]
@@ -247,8 +247,8 @@ def _sector(vertices: NDArray[np.float64], normals: NDArray[np.float64], polygon
     the pass whose wedge holds it deepest (the smaller of its angles to the wedge's two sides,
     negative outside) is taken."""
     best: tuple[float, tuple[int, int, int]] | None = None
-    centroid = np.asarray(toward, dtype=np.float64)
-    for k, m in spots:
+    aim = np.asarray(toward, dtype=np.float64)
+    for k, m in dict.fromkeys(spots):  # a polygon that passes m twice is listed twice
         poly = polygons[k]
         n = normals[m] / max(float(np.linalg.norm(normals[m])), 1e-300)
         e1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
@@ -262,7 +262,7 @@ def _sector(vertices: NDArray[np.float64], normals: NDArray[np.float64], polygon
         for i in (j for j, x in enumerate(poly) if x == m):
             a0 = ang(vertices[poly[i - 1]])
             wedge = (ang(vertices[poly[(i + 1) % len(poly)]]) - a0) % (2 * np.pi)
-            t = (ang(centroid) - a0) % (2 * np.pi)
+            t = (ang(aim) - a0) % (2 * np.pi)
             depth = min(t, wedge - t)  # > 0 inside the wedge
             if best is None or depth > best[0]:
                 best = (depth, (k, m, i))
