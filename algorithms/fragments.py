@@ -243,10 +243,14 @@ def _sector(vertices: NDArray[np.float64], normals: NDArray[np.float64], polygon
 
     A walk arriving from p and leaving to q has the surface on its left, so in the tangent plane
     at m (normal n) the gap is the wedge swept counter-clockwise from p - m to q - m. The
-    fragment's direction at m is ``toward`` - m (the midpoint of its loop's two neighbours of m);
-    the pass whose wedge holds it deepest (the smaller of its angles to the wedge's two sides,
-    negative outside) is taken."""
-    best: tuple[float, tuple[int, int, int]] | None = None
+    fragment's direction at m is ``toward`` - m (the midpoint of its loop's two neighbours of m).
+    Of the passes whose wedge holds that direction the one with the narrowest wedge is taken: a
+    pass turning around a sliver of surface (m pinched, a copy of it with a fan of a few degrees)
+    has a wedge of nearly 360 degrees that holds every direction and says little, a narrower gap
+    that holds the fragment says where it is. (Taking the pass that holds it deepest instead chose
+    such a sliver's pass on featuretype cut 13_2: Hausdorff 20 %, wrong genus; now 6.2 %, right.)
+    If no wedge holds it, the one it is least outside of."""
+    best: tuple[tuple[float, float], tuple[int, int, int]] | None = None
     aim = np.asarray(toward, dtype=np.float64)
     for k, m in dict.fromkeys(spots):  # a polygon that passes m twice is listed twice
         poly = polygons[k]
@@ -264,8 +268,10 @@ def _sector(vertices: NDArray[np.float64], normals: NDArray[np.float64], polygon
             wedge = (ang(vertices[poly[(i + 1) % len(poly)]]) - a0) % (2 * np.pi)
             t = (ang(aim) - a0) % (2 * np.pi)
             depth = min(t, wedge - t)  # > 0 inside the wedge
-            if best is None or depth > best[0]:
-                best = (depth, (k, m, i))
+            # the narrowest gap that holds it; if none does, the one it is least outside of
+            key = (1.0, -wedge) if depth > 0 else (0.0, depth)
+            if best is None or key > best[0]:
+                best = (key, (k, m, i))
     assert best is not None
     return best[1]
 

@@ -260,6 +260,19 @@ def test_sector_of_a_fragment(at, expect):
     assert (k, m, i) == (expect, 0, 1)
 
 
+def test_sector_prefers_the_narrowest_gap_that_holds_the_fragment():
+    """One walk turns around a 2-degree sliver of surface at vertex 0 (its gap: 358 degrees), the
+    other through the quadrant x < 0 < y. A fragment in that quadrant lies in both gaps, deeper in
+    the first; the narrower gap is the one that says where it is."""
+    from algorithms.fragments import _sector
+
+    c, s1 = np.cos(np.radians(1)), np.sin(np.radians(1))
+    V = np.array([[0, 0, 0], [c, s1, 0], [c, -s1, 0], [0, 1, 0], [-1, 0, 0], [-0.3, 0.3, 0]], float)
+    N = np.tile([0.0, 0.0, 1.0], (len(V), 1))
+    polys = [(1, 0, 2, 9), (3, 0, 4, 8)]
+    assert _sector(V, N, polys, [(0, 0), (1, 0)], V[5]) == (1, 0, 1)
+
+
 @pytest.mark.parametrize("sign", [1.0, -1.0])
 def test_fragment_at_a_vertex_the_walk_passes_twice(sign):
     """The walk passes the fragment's vertex twice (each copy of it turns around one end of the
