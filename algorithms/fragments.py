@@ -17,10 +17,10 @@ faces of the output with their vertices unchanged. The fragment's winding follow
 is reversed (recorded) when its normal disagrees with the surface normal at ``m``.
 
 Where the walks pass ``m`` more than once (a pinch of the kept surface, the end of a bridge that two
-walks pass, a bare bridge walked both ways), the fragment joins the pass whose gap holds it: the
-gap of a pass from p to q is the wedge swept counter-clockwise from p - m to q - m in the tangent
-plane at ``m`` (``_sector``). At a sharp edge a fragment standing on the other face projects onto
-the tangent plane poorly, and the choice can be wrong: the fill around it then bulges.
+walks pass, a bare bridge walked both ways), the fragment joins the narrowest pass whose gap
+holds it: the gap of a pass from p to q is the wedge swept counter-clockwise from p - m to q - m in
+the tangent plane at ``m`` (``_sector``). At a sharp edge a fragment standing on the other face
+projects onto the tangent plane poorly, and the choice is less sure.
 """
 
 from __future__ import annotations
