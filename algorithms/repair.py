@@ -552,6 +552,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     beside: list[NDArray[np.int64]] = []  # bridge chain vertices on the border of a patch beside a crease
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
+        if len(poly) < 3:  # closed by merging a pinch's copies (_drop_repeats): nothing to darn
+            continue
         V = work.V()
         # darn on the neighbourhood of the hole only (three rings of faces, compact indices),
         # so the cost of a hole does not grow with the size of the intact surface (spec (17));
@@ -572,7 +574,10 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             work.faces = [merge_copies(f, pairs) for f in work.faces]
             incidence = _Incidence(work.F(), work.n)
             alias = {int(c): int(k) for c, k in pairs}
-            final[k + 1:] = [tuple(alias.get(x, x) for x in p) for p in final[k + 1:]]
+            # the holes still to darn see the merged vertex; where a walk passed a copy and its kept
+            # vertex one after the other, the edge between them has length 0 and goes (a patch
+            # over it would hold a triangle with a vertex twice: featuretype cut 15_0, full mode)
+            final[k + 1:] = [_drop_repeats(tuple(alias.get(x, x) for x in p)) for p in final[k + 1:]]
             pinned = [merge_copies(a, pairs) for a in pinned]
             beside = [merge_copies(a, pairs) for a in beside]
             locked = [merge_copies(a, pairs) for a in locked]
@@ -772,6 +777,12 @@ def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: 
         i, j = np.unravel_index(int(np.argmin(L)), L.shape)
         return int(i), int(j), 0.0
     return int(i), int(j), float(Q[i, j])
+
+
+def _drop_repeats(polygon: tuple[int, ...]) -> tuple[int, ...]:
+    """``polygon`` without the vertices that repeat the one before them (cyclically)."""
+    out = [v for i, v in enumerate(polygon) if v != polygon[i - 1]]
+    return tuple(out) if out else polygon[:1]
 
 
 def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]], lc: float,

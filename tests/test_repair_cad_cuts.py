@@ -87,3 +87,30 @@ def test_tunnel_between_two_small_loops_keeps_two_bridges():
     t = topology(res.mesh.faces)
     assert t.watertight and t.components == 1 and t.genus == before.genus + 1 == 7
     assert_input_kept(model, res.mesh, fragments=True)
+
+
+def test_merged_pinch_leaves_no_triangle_with_a_vertex_twice():
+    """Four balls and a slab cut the part (with 100 free points, full mode). Darning one hole merges
+    the copies of a pinched vertex; a later hole's walk passed a copy and its kept vertex one after
+    the other, so after the merge it had an edge of length 0 and its patch a triangle with a vertex
+    twice: a non-manifold edge, the output not closed. The merged walk now drops the repeat."""
+    from algorithms.repair import _drop_repeats
+
+    assert _drop_repeats((4, 7, 7, 9, 4)) == (7, 9, 4) and _drop_repeats((5, 5)) == (5,)
+    part = Mesh(*load_raw(data_file("featuretype.stl")))
+    c = face_centroids(part)
+    remove = np.zeros(part.n_faces, dtype=bool)
+    for p, r in (((-2.5, 1.25, 0.0), 0.39079817572124387), ((2.5, -1.25, 1.0), 0.6278633883927272),
+                 ((2.5, 1.25, 0.5), 0.6675645780633177), ((2.5, 1.25, 1.0), 0.18430845133556156)):
+        remove |= np.linalg.norm(c - np.array(p), axis=1) < r
+    n = np.array([0.28712856930011993, 0.8948519015614418, 0.34175613961352297])
+    remove |= np.abs(c @ n - 0.11389474323884632) < 0.269427771705127 / 2
+    case = cut(part, remove, name="featuretype four balls and a slab", description="", free_points=100, seed=15)
+    model = normalize(case.incomplete.vertices, case.incomplete.faces, extra_points=case.free_points)
+    res = repair(model, RepairParams(field=FieldParams(mode="full")))
+    f = res.mesh.faces
+    assert not ((f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])).any()
+    assert edge_table(f).counts.max() == 2
+    t = topology(f)
+    assert t.watertight and t.components == 1 and t.genus == 9
+    assert_input_kept(model, res.mesh, fragments=True)
