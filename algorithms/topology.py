@@ -7,6 +7,7 @@ is sequential by nature. Half-edges of face (a, b, c) are a->b, b->c, c->a.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -46,8 +47,20 @@ def edge_table(faces: NDArray[np.int64]) -> EdgeTable:
     return EdgeTable(edges, inv.ravel(), counts)
 
 
-def face_adjacency(faces: NDArray[np.int64], *, manifold_only: bool = True) -> NDArray[np.int64]:
-    """(K, 2) pairs of faces that share an edge (only edges with exactly two faces if manifold_only)."""
+@overload
+def face_adjacency(faces: NDArray[np.int64], *, manifold_only: bool = ...,
+                   with_edges: Literal[False] = ...) -> NDArray[np.int64]: ...
+
+
+@overload
+def face_adjacency(faces: NDArray[np.int64], *, manifold_only: bool = ...,
+                   with_edges: Literal[True]) -> tuple[NDArray[np.int64], NDArray[np.int64]]: ...
+
+
+def face_adjacency(faces: NDArray[np.int64], *, manifold_only: bool = True, with_edges: bool = False
+                   ) -> NDArray[np.int64] | tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """(K, 2) pairs of faces that share an edge (only edges with exactly two faces if manifold_only);
+    with ``with_edges`` also (K, 2) the shared edge of each pair (sorted vertex pair)."""
     et = edge_table(faces)
     order = np.argsort(et.halfedge_edge, kind="stable")
     e_sorted = et.halfedge_edge[order]
@@ -55,9 +68,11 @@ def face_adjacency(faces: NDArray[np.int64], *, manifold_only: bool = True) -> N
     # consecutive half-edges of the same edge
     same = e_sorted[1:] == e_sorted[:-1]
     pairs = np.stack([face_of[:-1][same], face_of[1:][same]], axis=1)
+    edge = e_sorted[:-1][same]
     if manifold_only:
-        pairs = pairs[et.counts[e_sorted[:-1][same]] == 2]
-    return pairs
+        two = et.counts[edge] == 2
+        pairs, edge = pairs[two], edge[two]
+    return (pairs, et.edges[edge]) if with_edges else pairs
 
 
 def islands(faces: NDArray[np.int64]) -> tuple[int, NDArray[np.int64]]:

@@ -79,3 +79,18 @@ def test_simple_loop_walk_equals_the_general_walk():
         fast, walk = _simple_loops(bhe, nv), _walk_loops(f, bhe, nv)
         assert len(walk) > 3
         assert len(fast) == len(walk) and all(np.array_equal(a, b) for a, b in zip(fast, walk))
+
+
+def test_face_adjacency_with_its_shared_edges():
+    """Two triangles on edge (1, 2) and a third face on it too (a non-manifold edge): the pairs and,
+    with ``with_edges``, the edge each pair shares."""
+    from algorithms.topology import face_adjacency
+
+    f = np.array([[0, 1, 2], [2, 1, 3], [1, 2, 4], [2, 3, 5]])
+    pairs, edges = face_adjacency(f, manifold_only=False, with_edges=True)
+    got = sorted((tuple(sorted(p)), tuple(e)) for p, e in zip(pairs.tolist(), edges.tolist()))
+    assert got == [((0, 1), (1, 2)), ((1, 2), (1, 2)), ((1, 3), (2, 3))]
+    pairs, edges = face_adjacency(f, with_edges=True)  # the manifold edges only
+    assert pairs.tolist() == [[1, 3]] and edges.tolist() == [[2, 3]]
+    plain = face_adjacency(f, manifold_only=False)
+    assert np.array_equal(plain, face_adjacency(f, manifold_only=False, with_edges=True)[0])

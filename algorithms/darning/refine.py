@@ -437,18 +437,13 @@ def _folded_pairs(p: NDArray[np.float64], f: NDArray[np.int64], *, cos: float = 
     t = p[f]
     n = _cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
-    pairs = face_adjacency(f, manifold_only=False)
-    pairs = pairs[np.einsum("ij,ij->i", n[pairs[:, 0]], n[pairs[:, 1]]) < cos]
+    pairs, shared = face_adjacency(f, manifold_only=False, with_edges=True)
+    folded = np.einsum("ij,ij->i", n[pairs[:, 0]], n[pairs[:, 1]]) < cos
+    pairs, shared = pairs[folded], shared[folded]
     if ignore is not None and len(ignore) and len(pairs):
         ig = np.sort(np.asarray(ignore, dtype=np.int64).reshape(-1, 2), axis=1)
-        fa, fb = f[pairs[:, 0]], f[pairs[:, 1]]
-        common = (fa[:, :, None] == fb[:, None, :]).any(axis=2)  # the shared edge's two corners
-        two = common.sum(axis=1) == 2
-        shared = np.zeros((len(pairs), 2), dtype=np.int64)
-        shared[two] = np.sort(fa[two][common[two]].reshape(-1, 2), axis=1)
         nv = len(p)
-        listed = np.isin(shared[:, 0] * nv + shared[:, 1], ig[:, 0] * nv + ig[:, 1]) & two
-        pairs = pairs[~listed]
+        pairs = pairs[~np.isin(shared[:, 0] * nv + shared[:, 1], ig[:, 0] * nv + ig[:, 1])]
     return pairs
 
 
