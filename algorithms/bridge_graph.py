@@ -98,8 +98,10 @@ class GraphState:
     _samples: list[NDArray[np.float64]] = field(default_factory=list)
     _owner: list[NDArray[np.int64]] = field(default_factory=list)
 
-    def conflict(self, b: Bridge) -> str | None:
-        """Why ``b`` conflicts with the kept bridges, or None."""
+    def conflict(self, b: Bridge, *, neighbourhood: float | None = None) -> str | None:
+        """Why ``b`` conflicts with the kept bridges, or None. ``neighbourhood``: the duplicate
+        distance for this bridge (default the rules')."""
+        near = self.rules.neighbourhood if neighbourhood is None else neighbourhood
         if b.start == b.end:
             return "starts and ends at the same vertex"
         la, ia = self.loop_of[b.start]
@@ -120,8 +122,7 @@ class GraphState:
                 qa, qb = self.vertices[k.start], self.vertices[k.end]
                 if ka != la:
                     qa, qb = qb, qa
-                if (np.linalg.norm(pa - qa) < self.rules.neighbourhood
-                        and np.linalg.norm(pb - qb) < self.rules.neighbourhood):
+                if np.linalg.norm(pa - qa) < near and np.linalg.norm(pb - qb) < near:
                     return f"duplicates bridge {k.start}-{k.end} in the same neighbourhood"
         if self.kept:
             pts = _dense(b.polyline(self.vertices), self.rules.clearance / 2)

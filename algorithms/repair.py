@@ -372,20 +372,19 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             lc_used = lc_used or tl.lc
             lines += list(tl.all_lines)
             tunnel_note = tl.note
-            wide = replace(rules, neighbourhood=params.neighbourhood_factor * (tl.lc or lc_for_rules))
-            trial = GraphState(state.vertices, loop_of, state.loop_sizes, wide)
+            wide = params.neighbourhood_factor * (tl.lc or lc_for_rules)
+            trial = GraphState(state.vertices, loop_of, state.loop_sizes, replace(rules, neighbourhood=wide))
             for k in state.kept:
                 trial.add(k)
+            # the two bridges of a tunnel join the loops at two places around them: ends closer than
+            # the smaller loop's mean radius duplicate (a wide L_c must not make every line between
+            # two small loops one neighbourhood)
+            radius = {k: params.neighbourhood_factor * loop_radius(frames[k]) for k in free_loops}
             by_pair: dict[tuple[int, int], list[tuple[Bridge, ForceLine]]] = {}
             for b, ln in as_bridges(list(tl.lines), "tunnel"):
                 n_arrived += 1
-                # the two bridges of a tunnel join the loops at two places around them: ends closer
-                # than the smaller loop's mean radius duplicate (a wide L_c must not make every
-                # line between two small loops one neighbourhood)
-                ra, rb = (loop_radius(frames[loop_of[v][0]]) for v in (b.start, b.end))
-                trial.rules = replace(wide, neighbourhood=min(wide.neighbourhood,
-                                                              params.neighbourhood_factor * min(ra, rb)))
-                why = trial.conflict(b)
+                ends = [radius.get(loop_of[v][0], wide) for v in (b.start, b.end)]
+                why = trial.conflict(b, neighbourhood=min(wide, *ends))
                 if why is None:
                     trial.add(b)
                     pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
