@@ -320,7 +320,8 @@ def fragment_bridge(vertices: NDArray[np.float64], normals: NDArray[np.float64],
     if not inner:
         return None
     frag = inner
-    rest = [k for k in range(n) if k not in set(inner) and polygon[k] != twice]
+    skip = set(inner)
+    rest = [k for k in range(n) if k not in skip and polygon[k] != twice]
     if not rest:
         return None
     fr = polygon_frame(vertices, normals, polygon)
