@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from .boundary import summarize, vertex_normals
 from .bridge_graph import (
+    BoundaryEdges,
     Bridge,
     ConflictRules,
     GraphState,
@@ -263,7 +264,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     lc_for_rules = spacing * 10
     rules = ConflictRules(clearance=params.clearance_factor * spacing,
                           neighbourhood=params.neighbourhood_factor * lc_for_rules, endpoint_gap=2)
-    state = GraphState(work.V(), loop_of, [len(lp) for lp in loops], rules)
+    boundary = BoundaryEdges(mesh.vertices, loops)
+    state = GraphState(work.V(), loop_of, [len(lp) for lp in loops], rules, boundary=boundary)
     guard = TopologyGuard(loops, [f.island for f in frames])
     notes: list[str] = []
     pending: list[tuple[int, Bridge, ForceLine, str]] = []
@@ -346,7 +348,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             if len(comps) < 2:
                 break
             sb = _join_components(work.V(), frames, comps, lc_used, params.field.ki,
-                                  {v for b in bridges for v in (b.start, b.end)})
+                                  {v for b in bridges for v in (b.start, b.end)}, boundary, rules.along)
             if sb is None:
                 break
             ia, ib, q = sb
@@ -373,7 +375,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             lines += list(tl.all_lines)
             tunnel_note = tl.note
             wide = params.neighbourhood_factor * (tl.lc or lc_for_rules)
-            trial = GraphState(state.vertices, loop_of, state.loop_sizes, replace(rules, neighbourhood=wide))
+            trial = GraphState(state.vertices, loop_of, state.loop_sizes, replace(rules, neighbourhood=wide),
+                               boundary=boundary)
             for k in state.kept:
                 trial.add(k)
             # the two bridges of a tunnel join the loops at two places around them: ends closer than
@@ -411,7 +414,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         for j, (idx, b, ln, why) in enumerate(pending):
             if b.start in on_bad and b.end in on_bad and "same neighbourhood" in why:
                 relaxed = GraphState(work.V(), loop_of, state.loop_sizes,
-                                     ConflictRules(rules.clearance, 0.0, rules.endpoint_gap))
+                                     replace(rules, neighbourhood=0.0), boundary=boundary)
                 for k in state.kept:
                     relaxed.add(k)
                 if relaxed.conflict(b) is None:
@@ -493,7 +496,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         if len(set(poly)) != len(poly):
             # not a disk: join its two sides (the spec adds the next best bridge)
             sb = (fragment_bridge(V, N, poly, attached) or
-                  _straight_bridge(V, N, poly, lc_used or spacing * 10, params.field.ki))
+                  _straight_bridge(V, N, poly, lc_used or spacing * 10, params.field.ki, boundary, rules.along))
             if sb is None:
                 records.append(HoleRecord(poly, verdict, origin, -1, "not a disk and no bridge joins its sides"))
                 final.append(poly)
@@ -756,13 +759,15 @@ class _Incidence:
 
 def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: NDArray[np.float64],
                           pb: NDArray[np.float64], tb: NDArray[np.float64], lc: float, ki: float,
-                          kernel: str = "gauss") -> tuple[int, int, float]:
+                          kernel: str = "gauss", accept: Callable[[int, int], bool] | None = None,
+                          tries: int = 64) -> tuple[int, int, float]:
     """The best straight bridge from a point of set A to a point of set B: (index in A, index in B, Q).
 
     The straight-bridge quality of spec §3 with n_X = the surface normal at A, from
     algorithms.field.quality: s_A, s_B (1a, 1b), q_T = s_A . s_B (2) > 0 required,
     Q = q_T q1(L) (1 + k_i q4) (3, 9) with q4 (7) at A. When no pair is compatible (q_T <= 0
-    everywhere), the shortest pair, with Q = 0.
+    everywhere), the shortest pair, with Q = 0. ``accept(i, j)``: a further test (e.g. not along
+    the boundary), tried on the ``tries`` best pairs in order; when none passes, the best pair.
     """
     from .field.quality import q1, q4, q_topological, s_vectors
 
@@ -771,11 +776,15 @@ def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: 
     qt = q_topological(a, ta[:, None, :], b, tb[None, :, :])  # (2)
     L = np.linalg.norm(b - a, axis=2)
     Q = np.where(qt > 0, qt * q1(L, max(lc, 1e-12), kernel) * (1 + ki * q4(sa, na[:, None, :])), -np.inf)  # (9)
-    i, j = np.unravel_index(int(np.argmax(Q)), Q.shape)
-    if not np.isfinite(Q[i, j]):
-        i, j = np.unravel_index(int(np.argmin(L)), L.shape)
-        return int(i), int(j), 0.0
-    return int(i), int(j), float(Q[i, j])
+    compatible = bool(np.isfinite(Q).any())
+    # best quality first; when no pair is compatible, shortest first
+    order = np.argsort(-Q, axis=None, kind="stable") if compatible else np.argsort(L, axis=None, kind="stable")
+    order = order[:np.count_nonzero(np.isfinite(Q))] if compatible else order
+    best = order[0]
+    if accept is not None:
+        best = next((k for k in order[:tries] if accept(*np.unravel_index(int(k), Q.shape))), best)
+    i, j = np.unravel_index(int(best), Q.shape)
+    return int(i), int(j), float(Q[i, j]) if compatible else 0.0
 
 
 def _drop_repeats(polygon: tuple[int, ...]) -> tuple[int, ...]:
@@ -785,9 +794,11 @@ def _drop_repeats(polygon: tuple[int, ...]) -> tuple[int, ...]:
 
 
 def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]], lc: float,
-                     ki: float, taken: set[int] = frozenset()) -> tuple[int, int, float] | None:
+                     ki: float, taken: set[int] = frozenset(),
+                     boundary: BoundaryEdges | None = None, along: float = 0.0) -> tuple[int, int, float] | None:
     """The best straight bridge from the first component's loops to any other component's loops,
-    between loop vertices no kept bridge ends at (``taken``: two bridges may not share an end)."""
+    between loop vertices no kept bridge ends at (``taken``: two bridges may not share an end),
+    that does not run along the ``boundary`` (:meth:`BoundaryEdges.runs_along`)."""
     first = set(comps[0])
     a_fr = [f for f in frames if f.island in first]
     b_fr = [f for f in frames if f.island not in first]
@@ -801,7 +812,11 @@ def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]
     if not fa.any() or not fb.any():
         return None
     A, ta, na, B, tb = A[fa], ta[fa], na[fa], B[fb], tb[fb]
-    i, j, q = _best_straight_bridge(V[A], ta, na, V[B], tb, lc, ki)
+    def accept(i: int, j: int) -> bool:
+        return boundary is None or not boundary.runs_along(Bridge(int(A[i]), int(B[j]), np.zeros((0, 3)), 0.0),
+                                                          V, along)
+
+    i, j, q = _best_straight_bridge(V[A], ta, na, V[B], tb, lc, ki, accept=accept)
     return int(A[i]), int(B[j]), q
 
 
@@ -896,16 +911,22 @@ def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:
 
 
 def _straight_bridge(V: NDArray[np.float64], N: NDArray[np.float64], polygon: tuple[int, ...],
-                     lc: float, ki: float) -> tuple[int, int, float] | None:
+                     lc: float, ki: float, boundary: BoundaryEdges | None = None,
+                     along: float = 0.0) -> tuple[int, int, float] | None:
     """The best straight bridge between the two sides of a non-disk walk (positions i, j and its
-    quality, :func:`_best_straight_bridge`)."""
+    quality, :func:`_best_straight_bridge`) that does not run along the ``boundary``."""
     sides = _sides(polygon)
     if sides is None:
         return None
     s1, s2 = (np.asarray(x) for x in sides)
     fr = polygon_frame(V, N, polygon)
+
+    def accept(i: int, j: int) -> bool:
+        a, b = polygon[s1[i]], polygon[s2[j]]
+        return boundary is None or not boundary.runs_along(Bridge(a, b, np.zeros((0, 3)), 0.0), V, along)
+
     i, j, q = _best_straight_bridge(fr.points[s1], fr.tangent[s1], fr.normal[s1], fr.points[s2], fr.tangent[s2],
-                                    lc, ki)
+                                    lc, ki, accept=accept)
     return int(s1[i]), int(s2[j]), q
 
 

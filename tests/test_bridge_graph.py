@@ -2,11 +2,13 @@ import numpy as np
 import pytest
 
 from algorithms.bridge_graph import (
+    BoundaryEdges,
     Bridge,
     ConflictRules,
     GraphState,
     TopologyGuard,
     resample_chain,
+    segment_distance,
     split_polygon,
     walk_holes,
 )
@@ -147,3 +149,61 @@ def test_topology_guard_incremental_walks_match_a_full_walk():
                 assert e == "handle" and len(holes) == n_walks - 1
             n_walks = len(holes)
         assert comps == len(guard.components())
+
+
+def test_a_bridge_along_the_boundary_conflicts():
+    # three unit triangles in a row along the x axis, each touching the next at a corner (copies:
+    # vertices 2/3 and 5/6 sit at the same points), as a cut wall leaves them; the middle one is
+    # half as tall
+    V = np.array([[0, 0, 0], [0.5, 1, 0], [1, 0, 0], [1, 0, 0], [1.5, 0.5, 0], [2, 0, 0], [2, 0, 0],
+                  [2.5, 1, 0], [3, 0, 0], [1.5, -1, 0]], dtype=float)
+    loops = [np.array([0, 2, 1]), np.array([3, 5, 4]), np.array([6, 8, 7])]
+    edges = BoundaryEdges(V, loops)
+    none = np.zeros((0, 3))
+    # from the first triangle's corner 2 to the copy 6: along the middle triangle's edge 3-5
+    assert edges.runs_along(Bridge(2, 6, none, 1.0), V, 0.1)
+    # from 0 to 8 along the bottom: through the corners of the other triangles
+    assert edges.runs_along(Bridge(0, 8, none, 1.0), V, 0.1)
+    # between the tops of the first and last triangles: 0.5 clear of the middle one's apex 4
+    # (a quarter of its length of 2.0: above the fraction 0.1, below 0.3)
+    top = Bridge(1, 7, none, 1.0)
+    assert not edges.runs_along(top, V, 0.1) and edges.runs_along(top, V, 0.3)
+    # edges at the bridge's own ends do not count: 1 -> 4 leaves along nothing but its own loops
+    assert not edges.runs_along(Bridge(1, 4, none, 1.0), V, 0.1)
+    # a curved bridge: its middle half is tested by arc length, here a detour 1 above the row
+    arc = Bridge(0, 8, np.array([[0, 2, 0], [3, 2, 0]], dtype=float), 1.0)
+    assert not edges.runs_along(arc, V, 0.1)
+    # in the graph: a conflict with its reason
+    loop_of = {int(v): (k, i) for k, lp in enumerate(loops) for i, v in enumerate(lp)}
+    state = GraphState(V, loop_of, [3, 3, 3], ConflictRules(0.1, 0.5), boundary=edges)
+    assert "runs along the boundary" in state.conflict(Bridge(2, 6, none, 1.0))
+    assert state.conflict(top) is None
+
+
+def test_segment_distance_against_brute_force():
+    rng = np.random.default_rng(3)
+    p0, p1, q0, q1 = (rng.normal(size=(120, 3)) for _ in range(4))
+    d = segment_distance(p0, p1, q0, q1)
+    g = np.linspace(0.0, 1.0, 501)
+    brute = np.array([np.linalg.norm(p0[k] + g[:, None, None] * (p1[k] - p0[k])
+                                     - q0[k] - g[None, :, None] * (q1[k] - q0[k]), axis=2).min() for k in range(120)])
+    # a feasible pair of points: never below the true distance; the grid is 1/500 fine
+    assert (d <= brute + 1e-12).all() and np.abs(d - brute).max() < 5e-3
+    # parallel, crossing, a point against a segment
+    o = np.zeros(3)
+    assert segment_distance(o, np.array([1.0, 0, 0]), np.array([0.5, 1, 0]), np.array([2.0, 1, 0])) == pytest.approx(1.0)
+    assert segment_distance(np.array([-1.0, 0, 0]), np.array([1.0, 0, 0]), np.array([0, -1.0, 0]),
+                            np.array([0, 1.0, 0])) == pytest.approx(0.0)
+    assert segment_distance(o, o, np.array([0.5, 1, 0]), np.array([2.0, 1, 0])) == pytest.approx(np.hypot(0.5, 1))
+
+
+def test_a_bridge_that_crosses_a_boundary_edge_runs_along_it():
+    # a chord that crosses a boundary edge at a point no sample would land on exactly
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.5131, -0.3, 0], [0.5131, 0.3, 0], [0.6, 0.3, 0]], dtype=float)
+    edges = BoundaryEdges(V, [np.array([2, 3, 4])])
+    assert edges.runs_along(Bridge(0, 1, np.zeros((0, 3)), 1.0), V, 0.001)
+    V2 = V.copy()
+    V2[2:, 2] = 0.01  # lifted 0.01 off the chord: 1 % of its length
+    lifted = BoundaryEdges(V2, [np.array([2, 3, 4])])
+    assert not lifted.runs_along(Bridge(0, 1, np.zeros((0, 3)), 1.0), V2, 0.005)
+    assert lifted.runs_along(Bridge(0, 1, np.zeros((0, 3)), 1.0), V2, 0.02)
