@@ -523,9 +523,11 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
                 if np.linalg.norm(V[list(poly)] - pts[0], axis=1).min() <= 1e-9 * spacing:
                     pts = pts[:0]  # an earlier split already put its vertex there: no second copy
-        if not len(pts) and _is_edge(work.F(), poly[i], poly[j]):
+        if not len(pts) and _is_edge(work.F(), poly[i], poly[j], model.vertex_origin):
             # a bare chord that is an edge already (featuretype cut by a slab: the border edge of a
-            # two-face island between its two bridges) would be non-manifold: one vertex midway
+            # two-face island between its two bridges) would be non-manifold: one vertex midway.
+            # Between copies too: once the copies are merged it is that edge (featuretype cut by
+            # balls and a slab: a chord from a vertex to a copy of its neighbour, four faces)
             pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
         b = Bridge(int(poly[i]), int(poly[j]), pts, q, kind, len(lines) - 1 if line is not None else -1)
         chain_normals = (_chain_normals(line, pts) if line is not None
@@ -884,8 +886,13 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     return [b1, b2], [other, h1, h2], [ids1, ids2]
 
 
-def _is_edge(F: NDArray[np.int64], a: int, b: int) -> bool:
-    """Whether some face has the edge (a, b)."""
+def _is_edge(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None = None) -> bool:
+    """Whether some face has the edge (a, b); with ``origin`` (each model vertex's input vertex),
+    an edge between copies of a and b counts too."""
+    if origin is not None:
+        n = len(origin)
+        F = np.where(F < n, origin[np.minimum(F, n - 1)], F)
+        a, b = (int(origin[v]) if v < n else v for v in (a, b))
     rows = F[(F == a).any(axis=1)]
     return bool((rows == b).any())
 
