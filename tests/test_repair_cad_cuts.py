@@ -89,6 +89,20 @@ def test_tunnel_between_two_small_loops_keeps_two_bridges():
     assert_input_kept(model, res.mesh, fragments=True)
 
 
+def balls_and_slab(balls, normal, offset, width, *, seed, mode, free_points=100):
+    """Featuretype cut by balls (centre, radius) and a slab |n.x - offset| < width / 2 (the sweep's
+    random cuts, rebuilt from their parameters), normalised and repaired: (model, result)."""
+    part = Mesh(*load_raw(data_file("featuretype.stl")))
+    c = face_centroids(part)
+    remove = np.zeros(part.n_faces, dtype=bool)
+    for p, r in balls:
+        remove |= np.linalg.norm(c - np.array(p), axis=1) < r
+    remove |= np.abs(c @ np.array(normal) - offset) < width / 2
+    case = cut(part, remove, name="featuretype balls and a slab", description="", free_points=free_points, seed=seed)
+    model = normalize(case.incomplete.vertices, case.incomplete.faces, extra_points=case.free_points)
+    return model, repair(model, RepairParams(field=FieldParams(mode=mode)))
+
+
 def test_merged_pinch_leaves_no_triangle_with_a_vertex_twice():
     """Four balls and a slab cut the part (with 100 free points, full mode). Darning one hole merges
     the copies of a pinched vertex; a later hole's walk passed a copy and its kept vertex one after
@@ -97,17 +111,10 @@ def test_merged_pinch_leaves_no_triangle_with_a_vertex_twice():
     from algorithms.repair import _drop_repeats
 
     assert _drop_repeats((4, 7, 7, 9, 4)) == (7, 9, 4) and _drop_repeats((5, 5)) == (5,)
-    part = Mesh(*load_raw(data_file("featuretype.stl")))
-    c = face_centroids(part)
-    remove = np.zeros(part.n_faces, dtype=bool)
-    for p, r in (((-2.5, 1.25, 0.0), 0.39079817572124387), ((2.5, -1.25, 1.0), 0.6278633883927272),
-                 ((2.5, 1.25, 0.5), 0.6675645780633177), ((2.5, 1.25, 1.0), 0.18430845133556156)):
-        remove |= np.linalg.norm(c - np.array(p), axis=1) < r
-    n = np.array([0.28712856930011993, 0.8948519015614418, 0.34175613961352297])
-    remove |= np.abs(c @ n - 0.11389474323884632) < 0.269427771705127 / 2
-    case = cut(part, remove, name="featuretype four balls and a slab", description="", free_points=100, seed=15)
-    model = normalize(case.incomplete.vertices, case.incomplete.faces, extra_points=case.free_points)
-    res = repair(model, RepairParams(field=FieldParams(mode="full")))
+    model, res = balls_and_slab((((-2.5, 1.25, 0.0), 0.39079817572124387), ((2.5, -1.25, 1.0), 0.6278633883927272),
+                                 ((2.5, 1.25, 0.5), 0.6675645780633177), ((2.5, 1.25, 1.0), 0.18430845133556156)),
+                                (0.28712856930011993, 0.8948519015614418, 0.34175613961352297),
+                                0.11389474323884632, 0.269427771705127, seed=15, mode="full")
     f = res.mesh.faces
     assert not ((f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])).any()
     assert edge_table(f).counts.max() == 2
@@ -124,17 +131,10 @@ def test_wall_triangles_touching_at_corners_close_into_one_surface():
     a detached tetrahedron: two components. Bridges that run along the boundary are now refused
     (bridge_graph.BoundaryEdges): here the straight bridges that join what no force line joined and
     the sides of the non-disk walks."""
-    part = Mesh(*load_raw(data_file("featuretype.stl")))
-    c = face_centroids(part)
-    remove = np.zeros(part.n_faces, dtype=bool)
-    for p, r in (((2.5, -1.25, 1.0), 0.6687600340474917), ((-2.5, -1.25, 1.0), 0.598631652103867),
-                 ((-2.5, 1.25, 1.0), 0.28165726468946073)):
-        remove |= np.linalg.norm(c - np.array(p), axis=1) < r
-    n = np.array([-0.6123935573972279, 0.7074217133214885, 0.352886171987027])
-    remove |= np.abs(c @ n + 0.31924636466848877) < 0.26759478374547757 / 2
-    case = cut(part, remove, name="featuretype three balls and a slab", description="", free_points=100, seed=15)
-    model = normalize(case.incomplete.vertices, case.incomplete.faces, extra_points=case.free_points)
-    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    model, res = balls_and_slab((((2.5, -1.25, 1.0), 0.6687600340474917), ((-2.5, -1.25, 1.0), 0.598631652103867),
+                                 ((-2.5, 1.25, 1.0), 0.28165726468946073)),
+                                (-0.6123935573972279, 0.7074217133214885, 0.352886171987027),
+                                -0.31924636466848877, 0.26759478374547757, seed=15, mode="light")
     f = res.mesh.faces
     assert edge_table(f).counts.max() == 2
     t = topology(f)
@@ -157,18 +157,11 @@ def test_split_chord_between_copies_of_an_edge_gets_a_vertex():
     origin = np.array([0, 1, 2, 1])  # vertex 3 is a copy of 1
     assert not _is_edge(F, 0, 3) and _is_edge(F, 0, 3, origin) and _is_edge(F, 3, 2, origin)
     assert not _is_edge(F, 3, 4, np.array([0, 1, 2, 1, 4]))
-    part = Mesh(*load_raw(data_file("featuretype.stl")))
-    c = face_centroids(part)
-    remove = np.zeros(part.n_faces, dtype=bool)
-    for p, r in (((2.5, 1.25, 1.0), 0.6862816899052817), ((2.5, -1.25, 1.0), 0.5613853339011625),
-                 ((-2.5, -1.25, 1.0), 0.3540001044674994), ((-2.5, -1.25, 0.0), 0.6905120168834936),
-                 ((-2.5, 1.25, 1.0), 0.32992570011233185)):
-        remove |= np.linalg.norm(c - np.array(p), axis=1) < r
-    n = np.array([0.7780201606679658, 0.6151879892979507, 0.12739060961364929])
-    remove |= np.abs(c @ n - 0.7113235660323769) < 0.2070384305109183 / 2
-    case = cut(part, remove, name="featuretype five balls and a slab", description="", free_points=100, seed=13)
-    model = normalize(case.incomplete.vertices, case.incomplete.faces, extra_points=case.free_points)
-    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    model, res = balls_and_slab((((2.5, 1.25, 1.0), 0.6862816899052817), ((2.5, -1.25, 1.0), 0.5613853339011625),
+                                 ((-2.5, -1.25, 1.0), 0.3540001044674994), ((-2.5, -1.25, 0.0), 0.6905120168834936),
+                                 ((-2.5, 1.25, 1.0), 0.32992570011233185)),
+                                (0.7780201606679658, 0.6151879892979507, 0.12739060961364929),
+                                0.7113235660323769, 0.2070384305109183, seed=13, mode="light")
     f = res.mesh.faces
     assert edge_table(f).counts.max() == 2
     t = topology(f)
