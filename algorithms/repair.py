@@ -789,6 +789,15 @@ def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: 
     return int(i), int(j), float(Q[i, j]) if compatible else 0.0
 
 
+def _off_boundary(boundary: BoundaryEdges | None, V: NDArray[np.float64], along: float, a: NDArray[np.int64],
+                  b: NDArray[np.int64]) -> Callable[[int, int], bool] | None:
+    """For :func:`_best_straight_bridge`: whether the straight bridge from vertex a[i] to vertex
+    b[j] keeps off the ``boundary`` (:meth:`BoundaryEdges.runs_along`); None without a boundary."""
+    if boundary is None:
+        return None
+    return lambda i, j: not boundary.runs_along(Bridge(int(a[i]), int(b[j]), np.zeros((0, 3)), 0.0), V, along)
+
+
 def _drop_repeats(polygon: tuple[int, ...]) -> tuple[int, ...]:
     """``polygon`` without the vertices that repeat the one before them (cyclically)."""
     out = [v for i, v in enumerate(polygon) if v != polygon[i - 1]]
@@ -814,11 +823,7 @@ def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]
     if not fa.any() or not fb.any():
         return None
     A, ta, na, B, tb = A[fa], ta[fa], na[fa], B[fb], tb[fb]
-    def accept(i: int, j: int) -> bool:
-        return boundary is None or not boundary.runs_along(Bridge(int(A[i]), int(B[j]), np.zeros((0, 3)), 0.0),
-                                                          V, along)
-
-    i, j, q = _best_straight_bridge(V[A], ta, na, V[B], tb, lc, ki, accept=accept)
+    i, j, q = _best_straight_bridge(V[A], ta, na, V[B], tb, lc, ki, accept=_off_boundary(boundary, V, along, A, B))
     return int(A[i]), int(B[j]), q
 
 
@@ -927,13 +932,9 @@ def _straight_bridge(V: NDArray[np.float64], N: NDArray[np.float64], polygon: tu
         return None
     s1, s2 = (np.asarray(x) for x in sides)
     fr = polygon_frame(V, N, polygon)
-
-    def accept(i: int, j: int) -> bool:
-        a, b = polygon[s1[i]], polygon[s2[j]]
-        return boundary is None or not boundary.runs_along(Bridge(a, b, np.zeros((0, 3)), 0.0), V, along)
-
+    p = np.asarray(polygon)
     i, j, q = _best_straight_bridge(fr.points[s1], fr.tangent[s1], fr.normal[s1], fr.points[s2], fr.tangent[s2],
-                                    lc, ki, accept=accept)
+                                    lc, ki, accept=_off_boundary(boundary, V, along, p[s1], p[s2]))
     return int(s1[i]), int(s2[j]), q
 
 
