@@ -123,10 +123,7 @@ class BoundaryEdges:
     def runs_along(self, b: Bridge, vertices: NDArray[np.float64], frac: float) -> bool:
         """Whether the middle half of ``b`` (by arc length) passes within ``frac`` x its length of
         a boundary edge not at its ends (crossing one included)."""
-        return self.polyline_runs_along(b.polyline(vertices), {b.start, b.end}, frac)
-
-    def polyline_runs_along(self, poly: NDArray[np.float64], ends: set[int], frac: float) -> bool:
-        """:meth:`runs_along` for a chain given by its points (``ends``: its end vertices)."""
+        poly = b.polyline(vertices)
         seg = np.linalg.norm(np.diff(poly, axis=0), axis=1)
         total = float(seg.sum())
         if total <= 0 or frac <= 0:
@@ -136,7 +133,7 @@ class BoundaryEdges:
         t = np.concatenate([[0.25 * total], s[inner], [0.75 * total]])
         mid = np.stack([np.interp(t, s, poly[:, k]) for k in range(3)], axis=1)
         tol = frac * total
-        return bool((self.distance(mid[:-1], mid[1:], ends, tol) < tol).any())
+        return bool((self.distance(mid[:-1], mid[1:], {b.start, b.end}, tol) < tol).any())
 
 
 def segment_distance(p0: NDArray[np.float64], p1: NDArray[np.float64], q0: NDArray[np.float64],

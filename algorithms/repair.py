@@ -470,7 +470,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         if ends is not None and len(set(poly)) == len(poly) and n_creased < max_creased:
             if surface is None:
                 surface = Surface(mesh.vertices, mesh.faces)
-            halves = _continue_creases(work, poly, ends, spacing, surface, boundary, rules.along)
+            halves = _continue_creases(work, poly, ends, spacing, surface)
             n_creased += halves is not None
             if halves is not None:
                 new_bridges, parts, chain_ids = halves
@@ -557,7 +557,6 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
         if len(poly) < 3:  # closed by merging a pinch's copies (_drop_repeats): nothing to darn
-            patch_ids.append(np.zeros(0, dtype=np.int64))  # one entry per hole of ``final``
             continue
         V = work.V()
         # darn on the neighbourhood of the hole only (three rings of faces, compact indices),
@@ -829,26 +828,20 @@ def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]
 
 
 def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spacing: float,
-                      surface: Surface | None = None, boundary: BoundaryEdges | None = None,
-                      along: float = 0.0
+                      surface: Surface | None = None
                       ) -> tuple[list[Bridge], list[tuple[int, ...]], list[NDArray[np.int64]]] | None:
     """Split ``poly`` along the sharp creases it interrupts (algorithms.creases): a corner where
     three creases meet (two chains through the corner point), else the best pair of crease ends.
     Returns (bridges, the resulting hole polygons, each bridge's chain vertex ids), or None.
     Each crease end is used once (it is removed from ``ends``). ``surface``: the input faces; a
-    chain that runs over one of them (within 2 % of the spacing, creases.Surface) is refused, and
-    so is one along the ``boundary`` (:meth:`BoundaryEdges.runs_along`: featuretype cut by balls
-    and a slab, a crease continued along the part's edge where an input border edge already ran,
-    made a hole of zero area whose patch an inserted point then dragged 0.26 off the part)."""
+    chain that runs over one of them (within 2 % of the spacing, creases.Surface) is refused."""
     V = work.V()
 
     def valid(i: int, j: int, pts: NDArray[np.float64]) -> bool:
+        if surface is None:
+            return True
         end = V[poly[j]] if j >= 0 else pts[-1]
-        if boundary is not None and boundary.polyline_runs_along(
-                np.vstack([V[poly[i]], np.asarray(pts).reshape(-1, 3), end]),
-                {poly[i], poly[j]} if j >= 0 else {poly[i]}, along):
-            return False
-        return surface is None or not surface.crossed_by(V[poly[i]], pts, end, 0.02 * spacing, spacing / 4)
+        return not surface.crossed_by(V[poly[i]], pts, end, 0.02 * spacing, spacing / 4)
 
     def chain(i: int, j: int, pts: NDArray[np.float64], q: float, p: tuple[int, ...]):
         N = work.N()

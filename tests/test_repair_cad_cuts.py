@@ -169,27 +169,3 @@ def test_split_chord_between_copies_of_an_edge_gets_a_vertex():
     # their own holes: the tunnel rule of spec §6 step 2 says no)
     assert t.watertight and t.oriented and t.components == 1 and t.genus == 8
     assert_input_kept(model, res.mesh, fragments=True)
-
-
-def test_no_crease_continued_along_an_input_border_edge():
-    """Four balls and a slab cut the part. One hole's walk runs along the part's bottom edge
-    x = -2.5, z = 0 on an input border edge, and the crease of that edge was continued across the
-    hole along the same line: a hole of zero area between the chain and the border, whose patch the
-    angle refinement then pulled 0.26 off the part (the Hausdorff distance to the truth 4.5 % of the
-    diagonal). A crease chain along the boundary is now refused, like a bridge. (The chain then
-    tried, from 391 to a copy of 392, lies on the border edge between the copies of 391 and 392
-    too, but that edge is at its own end and not tested, as for bridges; it leaves no spike.)"""
-    model, res = balls_and_slab((((2.5, -1.25, 1.0), 0.18339112725191703), ((2.5, 1.25, 1.0), 0.6103025285799654),
-                                 ((2.0, 1.25, 0.0), 0.5449780663041104), ((-2.5, 1.25, 0.0), 0.2820461636515069)),
-                                (-0.019381991189871387, 0.3643000354433765, -0.9310799227743396),
-                                0.02772772257289624, 0.20692045042715412, seed=11, mode="light", free_points=0)
-    t = topology(res.mesh.faces)
-    assert t.watertight and t.oriented and t.components == 1 and t.genus == 9
-    assert_input_kept(model, res.mesh, fragments=True)
-    # the part is the box [-2.5, 2.5] x [-1.25, 1.25] x [0, 1.375]: no vertex leaves it by more
-    # than 1 % of the diagonal, 0.058 (the fill of a hole across the bottom face and a wall dips
-    # 0.014 below the bottom; the spike was 0.26)
-    V = res.mesh.vertices
-    lo, hi = model.mesh.vertices.min(axis=0), model.mesh.vertices.max(axis=0)
-    tol = 0.01 * float(np.linalg.norm(hi - lo))
-    assert (V >= lo - tol).all() and (V <= hi + tol).all()
