@@ -557,6 +557,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
         if len(poly) < 3:  # closed by merging a pinch's copies (_drop_repeats): nothing to darn
+            patch_ids.append(np.zeros(0, dtype=np.int64))  # one entry per hole of ``final``
             continue
         V = work.V()
         # darn on the neighbourhood of the hole only (three rings of faces, compact indices),
