@@ -108,16 +108,18 @@ class BoundaryEdges:
         """(K,) each segment p0[k] -> p1[k]'s distance to the nearest boundary edge not at a vertex
         of ``skip`` (inf beyond ``radius``)."""
         out = np.full(len(p0), np.inf)
-        if self.tree is None:
+        if self.tree is None or not len(p0):
             return out
         half = np.linalg.norm(p1 - p0, axis=1) / 2
-        for k, near in enumerate(self.tree.query_ball_point((p0 + p1) / 2, half + radius + self.reach)):
-            if not near:
-                continue
-            e = np.asarray(near)
-            e = e[~np.isin(self.edges[e], list(skip)).any(axis=1)]
-            if len(e):
-                out[k] = float(segment_distance(p0[k][None], p1[k][None], self.a[e], self.b[e]).min())
+        near = self.tree.query_ball_point((p0 + p1) / 2, half + radius + self.reach)
+        seg = np.repeat(np.arange(len(p0)), [len(x) for x in near])
+        if not len(seg):
+            return out
+        e = np.concatenate([np.asarray(x, dtype=np.int64) for x in near])
+        keep = ~np.isin(self.edges[e], list(skip)).any(axis=1)
+        seg, e = seg[keep], e[keep]
+        # every (segment, nearby edge) pair at once; the nearest per segment
+        np.minimum.at(out, seg, segment_distance(p0[seg], p1[seg], self.a[e], self.b[e]))
         return out
 
     def runs_along(self, b: Bridge, vertices: NDArray[np.float64], frac: float) -> bool:
