@@ -781,12 +781,13 @@ def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: 
     Q = np.where(qt > 0, qt * q1(L, max(lc, 1e-12), kernel) * (1 + ki * q4(sa, na[:, None, :])), -np.inf)  # (9)
     compatible = bool(np.isfinite(Q).any())
     # best quality first; when no pair is compatible, shortest first
-    order = np.argsort(-Q, axis=None, kind="stable") if compatible else np.argsort(L, axis=None, kind="stable")
-    order = order[:np.count_nonzero(np.isfinite(Q))] if compatible else order
-    best = order[0]
-    if accept is not None:
-        best = next((k for k in order[:tries] if accept(*np.unravel_index(int(k), Q.shape))), best)
-    i, j = np.unravel_index(int(best), Q.shape)
+    best = int(np.argmax(Q)) if compatible else int(np.argmin(L))
+    if accept is not None and not accept(*np.unravel_index(best, Q.shape)):
+        # sorted only when the best pair is refused (rare): the matrix may hold millions of pairs
+        order = np.argsort(-Q, axis=None, kind="stable") if compatible else np.argsort(L, axis=None, kind="stable")
+        order = order[:np.count_nonzero(np.isfinite(Q))] if compatible else order
+        best = int(next((k for k in order[1:tries] if accept(*np.unravel_index(int(k), Q.shape))), best))
+    i, j = np.unravel_index(best, Q.shape)
     return int(i), int(j), float(Q[i, j]) if compatible else 0.0
 
 
