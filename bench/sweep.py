@@ -1,0 +1,206 @@
+"""Random-cut sweep: the repair on many cuts it was not tuned on, beside MeshLib's bridge fill.
+
+    python -m bench.sweep [--seeds 1-5] [--per-seed 4] [--models a,b] [--modes light,full]
+                          [--peers meshlib] [--only MODEL:SEED:IT] [--save DIR] [--out F.jsonl]
+
+The bench cases (bench/cases.py) are fixed; this makes new ones "the same way" (balls of faces
+and slabs removed from a closed model, free points sampled on what was removed) from a seed, so a
+change can be checked against cases nobody looked at while making it. Each cut is a row per
+method: topology right (watertight, one component, the model's genus), the share of input faces
+kept, Hausdorff distance to the model (fraction of its diagonal), the unforced min patch angle and
+the wall time (scored as bench/repair.py scores). A cut is named MODEL:SEED:IT; ``--only`` re-runs
+one, ``--save`` writes it (vertices, faces, free points, truth) as an .npz for debugging.
+
+Not part of the test suite (minutes per seed); compare two runs' --out files with --compare.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import bench.repair as bench_repair
+from algorithms import cases as gen
+from algorithms.mesh import Mesh
+from bench.cases import DATA, BenchCase, ball, load, slab
+from bench.repair import meshlib_fill, ours_repair, run_isolated, score
+
+
+def _trimesh_model(kind: str) -> Mesh:
+    """trimesh's own primitives, slivers and all (a capsule's side is one row of triangles as long
+    as the capsule; the annulus' flat rings are fans of thin triangles): holes whose borders mix
+    short and long edges."""
+    import trimesh
+
+    if kind == "capsule":
+        m = trimesh.creation.capsule(height=2.0, radius=0.6, count=[48, 48])
+    else:  # a thick washer: genus 1 with four sharp circular creases
+        m = trimesh.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96)
+        m = m.subdivide().subdivide()
+    return Mesh(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64))
+
+
+def _peanut() -> Mesh:
+    """A sphere stretched along x and pinched at its middle (genus 0, saddle-shaped waist)."""
+    m = gen.icosphere(5)
+    v = m.vertices.copy()
+    x = v[:, 0]
+    v[:, 1:] *= (0.55 + 0.45 * x**2)[:, None]
+    v[:, 0] *= 1.8
+    return Mesh(v, m.faces)
+
+
+def _flat_torus() -> Mesh:
+    """A torus whose tube is an ellipse twice as wide as high (genus 1)."""
+    m = gen.torus(1.0, 0.3, 96, 32)
+    v = m.vertices.copy()
+    r = np.hypot(v[:, 0], v[:, 1])
+    scale = (1.0 + 1.0 * (r - 1.0) / r)[:, None]  # stretch the tube radially about its centre circle
+    v[:, :2] *= scale
+    return Mesh(v, m.faces)
+
+
+# name -> (loader, genus)
+MODELS = {
+    "ellipsoid": (lambda: gen.ellipsoid((1.4, 1.0, 0.7), subdivisions=5), 0),
+    "thin-torus": (lambda: gen.torus(1.0, 0.22, 96, 24), 1),
+    "peanut": (_peanut, 0),
+    "flat-torus": (_flat_torus, 1),
+    "capsule": (lambda: _trimesh_model("capsule"), 0),
+    "annulus": (lambda: _trimesh_model("annulus"), 1),
+    "fandisk": (lambda: load("fandisk.obj"), 0),
+    "featuretype": (lambda: load("featuretype.stl"), 9),
+    "torus": (lambda: load("torus.stl"), 1),
+    "bunny": (lambda: load("bunny_closed.ply"), 0),
+}
+
+
+def make_cut(model: str, seed: int, it: int) -> BenchCase:
+    """One random cut: 1-4 balls (radius 3-9 % of the diagonal) at random vertices, and with
+    probability 1/2 a slab (width 1.5-3 %) through a random vertex; 100 free points on the
+    removed part with probability 1/2."""
+    truth = _model(model)
+    genus = MODELS[model][1]
+    d = truth.bbox_diagonal()
+    rng = np.random.default_rng([seed, it, sum(map(ord, model))])
+    rm = np.zeros(truth.n_faces, dtype=bool)
+    for _ in range(rng.integers(1, 5)):
+        rm |= ball(truth, truth.vertices[rng.integers(truth.n_vertices)], rng.uniform(0.03, 0.09) * d)
+    if rng.random() < 0.5:
+        n = rng.normal(size=3)
+        p = truth.vertices[rng.integers(truth.n_vertices)]
+        rm |= slab(truth, n, float(p @ n / np.linalg.norm(n)), rng.uniform(0.015, 0.03) * d)
+    fp = 100 if rng.random() < 0.5 else 0
+    c = gen.cut(truth, rm, name=f"{model}:{seed}:{it}", description="random cut", free_points=fp, seed=seed)
+    m = c.incomplete
+    return BenchCase(c.name, np.asarray(m.vertices), np.asarray(m.faces), np.asarray(c.free_points), truth, genus,
+                     c.description)
+
+
+_CACHE: dict[str, Mesh] = {}
+
+
+def _model(name: str) -> Mesh:
+    if name not in _CACHE:
+        _CACHE[name] = MODELS[name][0]()
+    return _CACHE[name]
+
+
+def _seeds(text: str) -> list[int]:
+    out: list[int] = []
+    for part in text.split(","):
+        lo, _, hi = part.partition("-")
+        out += list(range(int(lo), int(hi or lo) + 1))
+    return out
+
+
+def _row_text(r: dict) -> str:
+    if r["status"] != "ok":
+        return f"{r['case']:<18} {r['method']:<8} {r['status']}: {r.get('note', '')}"
+    g = "-" if r["genus"] is None else f"{r['genus']:g}"
+    ang = r.get("unforced_min_angle")
+    return (f"{r['case']:<18} {r['method']:<8} {'RIGHT' if r['topology_right'] else 'wrong':<5} "
+            f"wt={'y' if r['watertight'] else 'n'} c={r['components']} g={g:<3} kept={r['kept']:.4f} "
+            f"H={100 * r.get('hausdorff', float('nan')):6.2f}% ang={'-' if ang is None else f'{ang:5.1f}'} "
+            f"t={r['seconds']:.2f}s")
+
+
+def compare(old: str, new: str) -> None:
+    """Print the rows whose topology, kept share or Hausdorff changed between two --out files."""
+    def rows(p: str) -> dict:
+        return {(r["case"], r["method"]): r for r in map(json.loads, Path(p).read_text().splitlines())}
+
+    a, b = rows(old), rows(new)
+    for k in sorted(set(a) & set(b)):
+        x, y = a[k], b[k]
+        fields = ("status", "topology_right", "genus", "kept")
+        diff = [f"{f}: {x.get(f)} -> {y.get(f)}" for f in fields if x.get(f) != y.get(f)]
+        hx, hy = x.get("hausdorff"), y.get("hausdorff")
+        if hx is not None and hy is not None and abs(hx - hy) > 1e-4:
+            diff.append(f"H: {100 * hx:.2f} -> {100 * hy:.2f} %")
+        if diff:
+            print(f"{k[0]:<18} {k[1]:<8} " + "; ".join(diff))
+    for name, d in (("old", a), ("new", b)):
+        ok = [r for k, r in d.items() if k in b and k in a]
+        right = sum(bool(r.get("topology_right")) for r in ok)
+        print(f"{name}: {right}/{len(ok)} topology right")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m bench.sweep", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", default="1-3", help="seeds, e.g. 1-5 or 1,4")
+    ap.add_argument("--per-seed", type=int, default=2, help="cuts per model and seed")
+    ap.add_argument("--models", default=",".join(MODELS), help="comma-separated: " + ", ".join(MODELS))
+    ap.add_argument("--modes", default="light,full")
+    ap.add_argument("--peers", default="meshlib", help="'meshlib' or '' (none)")
+    ap.add_argument("--only", help="one cut, MODEL:SEED:IT")
+    ap.add_argument("--save", help="write each cut as DIR/MODEL_SEED_IT.npz")
+    ap.add_argument("--samples", type=int, default=4000)
+    ap.add_argument("--timeout", type=float, default=300.0)
+    ap.add_argument("--out", help="append the rows as JSON lines here")
+    ap.add_argument("--compare", nargs=2, metavar=("OLD", "NEW"), help="compare two --out files and exit")
+    a = ap.parse_args(argv)
+    if a.compare:
+        compare(*a.compare)
+        return 0
+    if not DATA.exists():
+        print(f"sweep: {DATA} not found (the shared models)", file=sys.stderr)
+        return 2
+    if a.only:
+        m, s, i = a.only.split(":")
+        todo = [(m, int(s), int(i))]
+    else:
+        todo = [(m, s, i) for s in _seeds(a.seeds) for m in a.models.split(",") for i in range(a.per_seed)]
+    methods = {f"ours-{mode}": (lambda V, F, P, mode=mode: ours_repair(V, F, P, mode)) for mode in a.modes.split(",")}
+    if a.peers == "meshlib":
+        methods["meshlib"] = lambda V, F, P: meshlib_fill(V, F, P, "bridge")
+    bench_repair.REPEAT_BELOW = 0.0  # one run per tool: a sweep measures outcomes, bench/repair.py times
+    out = open(a.out, "a") if a.out else None
+    for model, seed, it in todo:
+        case = make_cut(model, seed, it)
+        if a.save:
+            Path(a.save).mkdir(parents=True, exist_ok=True)
+            np.savez(Path(a.save) / f"{model}_{seed}_{it}.npz", vertices=case.vertices, faces=case.faces,
+                     free_points=case.free_points, truth_vertices=case.truth.vertices, truth_faces=case.truth.faces,
+                     genus=case.genus)
+        for label, fn in methods.items():
+            status, got = run_isolated(fn, case, a.timeout)
+            row = {"case": case.name, "method": label.removeprefix("ours-"), "status": status}
+            if status == "ok":
+                V2, F2, dt = got
+                row.update(score(case, V2, F2, samples=a.samples), seconds=dt)
+            else:
+                row["note"] = str(got)
+            print(_row_text(row), flush=True)
+            if out:
+                out.write(json.dumps(row) + "\n")
+                out.flush()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
