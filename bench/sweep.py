@@ -178,6 +178,8 @@ def main(argv: list[str] | None = None) -> int:
     methods = {f"ours-{mode}": (lambda V, F, P, mode=mode: ours_repair(V, F, P, mode)) for mode in a.modes.split(",")}
     if a.peers == "meshlib":
         methods["meshlib"] = lambda V, F, P: meshlib_fill(V, F, P, "bridge")
+    import algorithms.repair  # noqa: F401  (imported once here: every forked run uses the same code)
+
     bench_repair.REPEAT_BELOW = 0.0  # one run per tool: a sweep measures outcomes, bench/repair.py times
     out = open(a.out, "a") if a.out else None
     for model, seed, it in todo:

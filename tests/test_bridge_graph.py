@@ -191,7 +191,8 @@ def test_segment_distance_against_brute_force():
     assert (d <= brute + 1e-12).all() and np.abs(d - brute).max() < 5e-3
     # parallel, crossing, a point against a segment
     o = np.zeros(3)
-    assert segment_distance(o, np.array([1.0, 0, 0]), np.array([0.5, 1, 0]), np.array([2.0, 1, 0])) == pytest.approx(1.0)
+    assert segment_distance(o, np.array([1.0, 0, 0]), np.array([0.5, 1, 0]),
+                            np.array([2.0, 1, 0])) == pytest.approx(1.0)
     assert segment_distance(np.array([-1.0, 0, 0]), np.array([1.0, 0, 0]), np.array([0, -1.0, 0]),
                             np.array([0, 1.0, 0])) == pytest.approx(0.0)
     assert segment_distance(o, o, np.array([0.5, 1, 0]), np.array([2.0, 1, 0])) == pytest.approx(np.hypot(0.5, 1))
