@@ -394,6 +394,25 @@ class Surface:
         return bool(len(x) and self.covers(x, tol).any())
 
 
+def passes_near(p0: NDArray[np.float64], pts: NDArray[np.float64], p1: NDArray[np.float64],
+                points: NDArray[np.float64], tol: float) -> bool:
+    """Whether the chain p0 -> pts -> p1 comes within ``tol`` of one of ``points`` (segment to
+    point distances, so a point between two samples counts)."""
+    poly = np.vstack([p0[None], np.asarray(pts, dtype=np.float64).reshape(-1, 3), p1[None]])
+    q = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if not len(q):
+        return False
+    a, d = poly[:-1], np.diff(poly, axis=0)  # (S, 3)
+    lo, hi = np.minimum(poly[:-1], poly[1:]) - tol, np.maximum(poly[:-1], poly[1:]) + tol
+    near = np.all((lo[:, None] <= q[None]) & (q[None] <= hi[:, None]), axis=2)  # (S, Q) box test first
+    si, qi = np.nonzero(near)
+    if not len(si):
+        return False
+    dd = (d[si] * d[si]).sum(1)
+    t = np.clip(((q[qi] - a[si]) * d[si]).sum(1) / np.maximum(dd, 1e-300), 0.0, 1.0)
+    return bool((np.linalg.norm(a[si] + t[:, None] * d[si] - q[qi], axis=1) <= tol).any())
+
+
 def _interleaved(a: tuple[int, int], b: tuple[int, int]) -> bool:
     (i, j), (k, m) = sorted(a), sorted(b)
     return (i < k < j) != (i < m < j) and len({i, j, k, m}) == 4

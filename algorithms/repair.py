@@ -35,7 +35,16 @@ from .bridge_graph import (
     walk_holes,
 )
 from .bridges import loop_radius
-from .creases import CreaseEnds, Surface, crease_corner, crease_ends, crease_line, crease_split, hermite
+from .creases import (
+    CreaseEnds,
+    Surface,
+    crease_corner,
+    crease_ends,
+    crease_line,
+    crease_split,
+    hermite,
+    passes_near,
+)
 from .fragments import Attached, attach_fragments, fragment_bridge
 from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
@@ -840,10 +849,21 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     V = work.V()
 
     def valid(i: int, j: int, pts: NDArray[np.float64]) -> bool:
-        if surface is None:
-            return True
         end = V[poly[j]] if j >= 0 else pts[-1]
-        return not surface.crossed_by(V[poly[i]], pts, end, 0.02 * spacing, spacing / 4)
+        # A chain never passes through another vertex of the hole's border (within 2 % of the
+        # spacing, or of its length if shorter). Random fandisk cut 1:1: a crease along an input
+        # edge that two border faces share (a one-face tip) ran on through the tip's vertex to the
+        # edge's far end; its sample there became a second copy of that vertex and the darning
+        # closed the tip with its own face reversed (an edge with four faces). Copies of the
+        # chain's own ends (at their very positions) are not other vertices: counting them refused
+        # a needed chain of featuretype-hole (Hausdorff 1.3 -> 3.3 %).
+        path = np.vstack([V[poly[i]], np.asarray(pts).reshape(-1, 3), end])
+        tol = 0.02 * min(spacing, float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum()))
+        q = V[np.delete(np.asarray(poly), [i, j] if j >= 0 else [i])]
+        q = q[(np.linalg.norm(q - path[0], axis=1) > tol) & (np.linalg.norm(q - path[-1], axis=1) > tol)]
+        if passes_near(path[0], pts, end, q, tol):
+            return False
+        return surface is None or not surface.crossed_by(V[poly[i]], pts, end, 0.02 * spacing, spacing / 4)
 
     def chain(i: int, j: int, pts: NDArray[np.float64], q: float, p: tuple[int, ...]):
         N = work.N()
