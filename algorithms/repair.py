@@ -579,8 +579,13 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             mask[:len(on_crease)] = on_crease
             apart = mask[glob[sub_f]].any(axis=1)
         local = {int(g): k for k, g in enumerate(glob)}
+        # the edges of holes still to darn (bare bridges between two of them) are edges of the
+        # output as much as the faces are: no chord may duplicate one (as degenerate faces (a, b, b)
+        # among ``apart``, which count as existing edges only)
+        later = np.asarray([(local[a], local[b], local[b]) for a, b in pending.among(poly)],
+                           dtype=np.int64).reshape(-1, 3)
         patch = darn(sub_v, sub_f[~apart], np.asarray([local[p] for p in poly], dtype=np.int64),
-                     method=params.darning, weight=params.weight, apart=sub_f[apart])
+                     method=params.darning, weight=params.weight, apart=np.vstack([sub_f[apart], later]))
         ids = work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
         to_global = np.concatenate([glob, ids])
         if len(patch.merged):  # a pinched hole: the copies of a split vertex on its border are one vertex again
@@ -592,6 +597,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             # vertex one after the other, the edge between them has length 0 and goes (a patch
             # over it would hold a triangle with a vertex twice: featuretype cut 15_0, full mode)
             final[k + 1:] = [_drop_repeats(tuple(alias.get(x, x) for x in p)) for p in final[k + 1:]]
+            pending = _PendingEdges(final, start=k + 1)
             pinned = [merge_copies(a, pairs) for a in pinned]
             beside = [merge_copies(a, pairs) for a in beside]
             locked = [merge_copies(a, pairs) for a in locked]
@@ -724,6 +730,42 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                         timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "), attached)
 
 
+class _PendingEdges:
+    """The edges of the hole polygons not darned yet, by vertex (a bare bridge or split chord is an
+    edge of the output before any face has it)."""
+
+    def __init__(self, polygons: list[tuple[int, ...]], start: int = 0) -> None:
+        self.polygons = polygons
+        self.count: dict[tuple[int, int], int] = {}
+        self.nbr: dict[int, set[int]] = {}
+        for k in range(start, len(polygons)):
+            for e in self._edges(polygons[k]):
+                self.count[e] = self.count.get(e, 0) + 1
+                self.nbr.setdefault(e[0], set()).add(e[1])
+                self.nbr.setdefault(e[1], set()).add(e[0])
+
+    @staticmethod
+    def _edges(poly: tuple[int, ...]) -> list[tuple[int, int]]:
+        return [(min(a, b), max(a, b)) for a, b in zip(poly, poly[1:] + poly[:1]) if a != b]
+
+    def darned(self, k: int) -> None:
+        """Hole k is being darned: its own edges are no longer pending (unless another hole has them)."""
+        for e in self._edges(self.polygons[k]):
+            c = self.count.get(e, 0) - 1
+            if c > 0:
+                self.count[e] = c
+            elif e in self.count:
+                del self.count[e]
+                self.nbr[e[0]].discard(e[1])
+                self.nbr[e[1]].discard(e[0])
+
+    def among(self, poly: tuple[int, ...]) -> list[tuple[int, int]]:
+        """Pending edges between two vertices of ``poly`` that are not one of its own edges."""
+        mine = set(poly)
+        own = set(self._edges(poly))
+        return [(a, b) for a in mine for b in self.nbr.get(a, ()) if a < b and b in mine and (a, b) not in own]
+
+
 class _Incidence:
     """Which faces touch which vertices, as the darning grows the surface: a table (CSR-like) of the
     faces there were when it was made (the input's), and the few patch faces added since (searched
@@ -803,10 +845,16 @@ def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: 
 def _off_boundary(boundary: BoundaryEdges | None, V: NDArray[np.float64], along: float, a: NDArray[np.int64],
                   b: NDArray[np.int64]) -> Callable[[int, int], bool] | None:
     """For :func:`_best_straight_bridge`: whether the straight bridge from vertex a[i] to vertex
-    b[j] keeps off the ``boundary`` (:meth:`BoundaryEdges.runs_along`); None without a boundary."""
+    b[j] keeps off the ``boundary`` (:meth:`BoundaryEdges.runs_along`) and is not an edge of the
+    surface already (:meth:`BoundaryEdges.is_edge`); None without a boundary."""
     if boundary is None:
         return None
-    return lambda i, j: not boundary.runs_along(Bridge(int(a[i]), int(b[j]), np.zeros((0, 3)), 0.0), V, along)
+
+    def accept(i: int, j: int) -> bool:
+        br = Bridge(int(a[i]), int(b[j]), np.zeros((0, 3)), 0.0)
+        return not boundary.is_edge(br) and not boundary.runs_along(br, V, along)
+
+    return accept
 
 
 def _drop_repeats(polygon: tuple[int, ...]) -> tuple[int, ...]:
