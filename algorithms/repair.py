@@ -273,7 +273,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     lc_for_rules = spacing * 10
     rules = ConflictRules(clearance=params.clearance_factor * spacing,
                           neighbourhood=params.neighbourhood_factor * lc_for_rules, endpoint_gap=2)
-    boundary = BoundaryEdges(mesh.vertices, loops)
+    boundary = BoundaryEdges(mesh.vertices, loops, mesh.faces)
     state = GraphState(work.V(), loop_of, [len(lp) for lp in loops], rules, boundary=boundary)
     guard = TopologyGuard(loops, [f.island for f in frames])
     notes: list[str] = []
@@ -563,8 +563,10 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     incidence = _Incidence(work.F(), work.n)
     patch_ids: list[NDArray[np.int64]] = []
     beside: list[NDArray[np.int64]] = []  # bridge chain vertices on the border of a patch beside a crease
+    pending = _PendingEdges(final)
     for k, poly in enumerate(final):
         step(0.6 + 0.38 * k / max(1, len(final)), f"darning hole {k + 1} of {len(final)}")
+        pending.darned(k)
         if len(poly) < 3:  # closed by merging a pinch's copies (_drop_repeats): nothing to darn
             patch_ids.append(np.zeros(0, dtype=np.int64))  # one entry per hole of ``final``
             continue
