@@ -98,7 +98,6 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
                     where.setdefault(int(origin[m]), []).append((k, m))
         return where
 
-    taken: set[int] = set()  # one fragment per vertex: a second one there would need its own sector
     # fragments at a vertex the holes pass more than once go last: a chain of fragments (touching
     # each other at vertices) must lie in one hole, so such a fragment joins the hole its chained
     # neighbours went into, if any
@@ -117,7 +116,9 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
             continue
         loop = [int(x) for x in boundary_loops(faces)[0]]
         where = occurrences()
-        if not attach or any(not where.get(a) for a in attach) or taken & set(attach):
+        # a second fragment at a vertex goes into the pass (sector) of the walk that holds it: the
+        # first one's loop made the walk pass that vertex twice (_sector)
+        if not attach or any(not where.get(a) for a in attach):
             notes.append(f"{label} left aside: not hanging at hole vertices")
             continue
         if any(a not in loop for a in attach):
@@ -179,7 +180,6 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
         unit = fn / max(float(np.linalg.norm(fn)), 1e-300)
         for x in walk:
             nrm_of[x] = unit
-        taken |= set(attach)
     # fragments that touch each other at a vertex (a chain of fragments across the hole): the walk
     # passes that vertex twice, once on each fragment's loop; the chain cuts the hole in two there
     pieces: list[tuple[int, ...]] = []
