@@ -479,7 +479,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         if ends is not None and len(set(poly)) == len(poly) and n_creased < max_creased:
             if surface is None:
                 surface = Surface(mesh.vertices, mesh.faces)
-            halves = _continue_creases(work, poly, ends, spacing, surface)
+            halves = _continue_creases(work, poly, ends, spacing, surface, model.vertex_origin)
             n_creased += halves is not None
             if halves is not None:
                 new_bridges, parts, chain_ids = halves
@@ -889,7 +889,7 @@ def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]
 
 
 def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spacing: float,
-                      surface: Surface | None = None
+                      surface: Surface | None = None, origin: NDArray[np.int64] | None = None
                       ) -> tuple[list[Bridge], list[tuple[int, ...]], list[NDArray[np.int64]]] | None:
     """Split ``poly`` along the sharp creases it interrupts (algorithms.creases): a corner where
     three creases meet (two chains through the corner point), else the best pair of crease ends.
@@ -929,7 +929,8 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
         pts = straight.points
         a, c = V[poly[straight.i]], V[poly[straight.j]]
         L = float(np.linalg.norm(c - a))
-        if 0 < L < 1.5 * spacing and not _is_edge(work.F(), poly[straight.i], poly[straight.j]):
+        edge = _is_edge(work.F(), poly[straight.i], poly[straight.j], origin)
+        if 0 < L < 1.5 * spacing and not edge:
             u = (c - a) / L
             off = np.linalg.norm((pts - a) - np.outer((pts - a) @ u, u), axis=1)
             if off.max(initial=0.0) <= 1e-3 * L:
@@ -937,6 +938,11 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
                 # halve an edge already shorter than the spacing (featuretype: 0.019 chain edges
                 # beside 0.25 border edges, 3 degree triangles)
                 pts = pts[:0]
+        if not len(pts) and edge:
+            # a bare crease chord between the ends of an edge, or copies of them, is that edge once
+            # the copies merge (featuretype random cut 3:0: from a copy of a vertex to its
+            # neighbour along their input edge, four faces): one vertex midway, as for split chords
+            pts = ((a + c) / 2)[None]
         b, ids = chain(straight.i, straight.j, pts, straight.quality, poly)
         for v in (poly[straight.i], poly[straight.j]):
             ends.use(v)

@@ -9,7 +9,8 @@ not a closed manifold or lost input faces, rebuilt here from their parameters:
 - featuretype 1:1: a row of one-face fragments hanging at the cut wall, two of them at one vertex:
   the second was left out (one fragment per vertex), an input face lost;
 - a bare bridge that is an edge of a hole still to darn: the hole darned before it may not use it
-  as a chord (unit case of the darning loop's pending edges)."""
+  as a chord (annulus 2:1, and a unit case of the darning loop's pending edges);
+- featuretype 3:0: a bare crease chord from a copy of a vertex to its neighbour (four faces)."""
 
 from __future__ import annotations
 
@@ -29,9 +30,10 @@ from algorithms.repair import RepairParams, _PendingEdges, repair
 from algorithms.topology import edge_table
 
 
-def random_cut(name: str, balls, slab, free_points: int, seed: int):
-    """The sweep's cut: balls (vertex, radius) of faces and a slab (normal, offset, width) removed."""
-    part = Mesh(*load_raw(data_file(name)))
+def random_cut(name: str | Mesh, balls, slab, free_points: int, seed: int):
+    """The sweep's cut: balls (vertex, radius) of faces and a slab (normal, offset, width) removed
+    from a shared model (by file name) or a mesh."""
+    part = name if isinstance(name, Mesh) else Mesh(*load_raw(data_file(name)))
     c = face_centroids(part)
     remove = np.zeros(part.n_faces, dtype=bool)
     for v, r in balls:
@@ -39,7 +41,7 @@ def random_cut(name: str, balls, slab, free_points: int, seed: int):
     if slab is not None:
         n, offset, width = slab
         remove |= np.abs(c @ np.asarray(n) - offset) < width / 2
-    case = cut(part, remove, name=name, description="", free_points=free_points, seed=seed)
+    case = cut(part, remove, name="random cut", description="", free_points=free_points, seed=seed)
     return normalize(case.incomplete.vertices, case.incomplete.faces, extra_points=case.free_points)
 
 
@@ -138,16 +140,26 @@ def test_darning_keeps_off_the_edges_of_holes_still_to_darn():
     straight bridge splits a walk; a quad darned before its neighbour took that neighbour's bare
     edge as its diagonal (an edge with four faces). The output is closed and manifold now; its genus
     is 2, not 1 (left open: a spurious handle)."""
-    import trimesh
-
-    m = trimesh.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96).subdivide().subdivide()
-    part = Mesh(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64))
-    c = face_centroids(part)
-    remove = np.zeros(part.n_faces, dtype=bool)
-    for v, r in ((1729, 0.16639060398529185), (6063, 0.21469308631294606)):
-        remove |= np.linalg.norm(c - part.vertices[v], axis=1) < r
-    case = cut(part, remove, name="annulus", description="")
-    model = normalize(case.incomplete.vertices, case.incomplete.faces)
+    model = annulus_cut([(1729, 0.16639060398529185), (6063, 0.21469308631294606)], None, 0, 2)
     res = repair(model, RepairParams(field=FieldParams(mode="light")))
     assert_closed_manifold(res)
     assert_input_kept(model, res.mesh)
+
+
+def annulus_cut(balls, slab, free_points: int, seed: int):
+    import trimesh
+
+    m = trimesh.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96).subdivide().subdivide()
+    return random_cut(Mesh(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)), balls, slab,
+                      free_points, seed)
+
+
+def test_bare_crease_chord_to_a_copy_of_an_edge_end_gets_a_vertex():
+    """featuretype 3:0 (three balls): a short straight crease from a copy of a vertex to its
+    neighbour along their input edge was a bare chord; once the copies merged it was that edge
+    (four faces). It gets a vertex midway."""
+    model = random_cut("featuretype.stl", [(182, 0.5074603324036662), (706, 0.32986817469764274),
+                                           (1408, 0.36487589243898894)], None, 0, 3)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_closed_manifold(res, genus=9)
+    assert_input_kept(model, res.mesh, fragments=True)
