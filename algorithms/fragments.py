@@ -71,7 +71,8 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
     did. Hanging at one vertex, its loop is walked into the polygon (the pipeline bridges the
     pinch, ``fragment_bridge``); at several (a triangle left across a hole by a cut, its corners on
     the hole's border), it cuts the polygon into the holes around it, and touching several holes it
-    joins them (``_walk_around``).
+    joins them (``_walk_around``). A fragment that touches only other fragments is attached in a
+    later round, at the vertices it shares with those already walked in.
     """
     polys = [tuple(int(x) for x in p) for p in polygons]
     src = list(range(len(polys)))  # the input polygon each polygon comes from
@@ -108,78 +109,97 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
         return len(at) == 1 and len(first.get(at[0], [])) > 1
 
     frags.sort(key=passed_often)
-    for fids, faces in frags:
-        attach = [int(x) for x in np.unique(faces) if used[x]]
-        label = f"fragment of face(s) {fids}"
-        if not orientation_consistent(faces) or euler_characteristic(faces) != 1 or len(boundary_loops(faces)) != 1:
-            notes.append(f"{label} left aside: not an oriented disk")
-            continue
-        loop = [int(x) for x in boundary_loops(faces)[0]]
-        where = occurrences()
-        # a second fragment at a vertex goes into the pass (sector) of the walk that holds it: the
-        # first one's loop made the walk pass that vertex twice (_sector)
-        if not attach or any(not where.get(a) for a in attach):
-            notes.append(f"{label} left aside: not hanging at hole vertices")
-            continue
-        if any(a not in loop for a in attach):
-            notes.append(f"{label} left aside: an attachment vertex is inside it")
-            continue
-        # the pass of the holes' walks each attachment vertex joins: the only one, or, where the
-        # holes pass the vertex more than once (a pinch of the kept surface, the ends of two walks,
-        # a bare bridge), the one whose gap holds the fragment, in the hole its chained neighbours
-        # went into if they did
-        own = set(np.unique(faces).tolist()) - set(attach)
-        passes: dict[int, tuple[int, int]] = {}  # fragment vertex -> (polygon, position) of its pass
-        for a in attach:
-            spots = where[a]
-            if len(spots) == 1:
-                k, m = spots[0]
-                passes[a] = (k, polys[k].index(m))
-            else:
+    # A fragment that touches only other fragments (the middle link of a chain of them across the
+    # hole: trimesh annulus cut 3:0) hangs at none of the surface's vertices. It waits for a later
+    # round, when the fragments it touches are in the walks, and then hangs at every vertex it
+    # shares with them (like a triangle whose corners lie on the hole's border).
+    walked: set[int] = set()  # vertices of the fragments attached in earlier rounds
+    todo = frags
+    while todo:
+        waiting: list[tuple[list[int], NDArray[np.int64]]] = []
+        attached_before = len(in_ids)
+        seen = set(walked)
+        for fids, faces in todo:
+            attach = [int(x) for x in np.unique(faces) if used[x]] or \
+                [int(x) for x in np.unique(faces) if int(x) in seen]
+            if not attach:
+                waiting.append((fids, faces))
+                continue
+            label = f"fragment of face(s) {fids}"
+            if not orientation_consistent(faces) or euler_characteristic(faces) != 1 or len(boundary_loops(faces)) != 1:
+                notes.append(f"{label} left aside: not an oriented disk")
+                continue
+            loop = [int(x) for x in boundary_loops(faces)[0]]
+            where = occurrences()
+            # a second fragment at a vertex goes into the pass (sector) of the walk that holds it: the
+            # first one's loop made the walk pass that vertex twice (_sector)
+            if not attach or any(not where.get(a) for a in attach):
+                notes.append(f"{label} left aside: not hanging at hole vertices")
+                continue
+            if any(a not in loop for a in attach):
+                notes.append(f"{label} left aside: an attachment vertex is inside it")
+                continue
+            # the pass of the holes' walks each attachment vertex joins: the only one, or, where the
+            # holes pass the vertex more than once (a pinch of the kept surface, the ends of two walks,
+            # a bare bridge), the one whose gap holds the fragment, in the hole its chained neighbours
+            # went into if they did
+            own = set(np.unique(faces).tolist()) - set(attach)
+            passes: dict[int, tuple[int, int]] = {}  # fragment vertex -> (polygon, position) of its pass
+            for a in attach:
+                spots = where[a]
+                if len(spots) == 1:
+                    k, m = spots[0]
+                    passes[a] = (k, polys[k].index(m))
+                else:
+                    s = loop.index(a)
+                    toward = V[[loop[s - 1], loop[(s + 1) % len(loop)]]].mean(axis=0)
+                    chained = [w for w in spots if own & set(polys[w[0]])]
+                    k, m, i = _sector(V, normals, polys, chained or spots, toward)
+                    passes[a] = (k, i)
+            to_hole = {a: polys[k][i] for a, (k, i) in passes.items()}  # fragment vertex -> the hole's vertex there
+            holes = sorted({k for k, _ in passes.values()})
+            t = V[faces]
+            fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
+            flip = bool(fn @ sum(nrm_of.get(m, normals[m]) for m in to_hole.values()) < 0)
+            if flip:  # reverse the winding: the loop runs the other way
+                faces = faces[:, ::-1]
+                loop = loop[::-1]
+                fn = -fn
+            if len(attach) == 1:
+                a = attach[0]
+                (k, i), m = passes[a], to_hole[a]
                 s = loop.index(a)
-                toward = V[[loop[s - 1], loop[(s + 1) % len(loop)]]].mean(axis=0)
-                chained = [w for w in spots if own & set(polys[w[0]])]
-                k, m, i = _sector(V, normals, polys, chained or spots, toward)
-                passes[a] = (k, i)
-        to_hole = {a: polys[k][i] for a, (k, i) in passes.items()}  # fragment vertex -> the hole's vertex there
-        holes = sorted({k for k, _ in passes.values()})
-        t = V[faces]
-        fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
-        flip = bool(fn @ normals[list(to_hole.values())].sum(axis=0) < 0)
-        if flip:  # reverse the winding: the loop runs the other way
-            faces = faces[:, ::-1]
-            loop = loop[::-1]
-            fn = -fn
-        if len(attach) == 1:
-            a = attach[0]
-            (k, i), m = passes[a], to_hole[a]
-            s = loop.index(a)
-            walk = loop[s + 1:] + loop[:s]  # f1..fk: the loop after the attachment vertex
-            polys[k] = polys[k][:i + 1] + tuple(walk) + (m,) + polys[k][i + 1:]
-            at.append(m)
-        else:  # hanging at several hole vertices: the fragment cuts its hole into pieces, or joins
-            # the holes it touches (a piece of surface spanning between them, like a wide bridge)
-            walk = [x for x in loop if x not in to_hole]
-            sub = {h: j for j, h in enumerate(holes)}
-            pieces = _walk_around([polys[h] for h in holes], [to_hole.get(x, x) for x in loop],
-                                  set(to_hole.values()),
-                                  {to_hole[a]: (sub[k], i) for a, (k, i) in passes.items()})
-            for h in holes:
-                polys[h] = ()  # () : replaced (or closed by the fragment), dropped below
-            polys += pieces
-            src += [src[passes[attach[0]][0]]] * len(pieces)
-            # joining holes at single vertices the walk passes them twice: bridged like a single
-            # attachment's pinch (fragment_bridge)
-            at += [m for m in to_hole.values() if any(q.count(m) > 1 for q in pieces)]
-        mapped = faces.copy()
-        for a, m in to_hole.items():  # the attachment vertices as the holes number them
-            mapped[faces == a] = m
-        out_f.append(mapped)
-        in_ids += fids
-        flips += [flip] * len(fids)
-        unit = fn / max(float(np.linalg.norm(fn)), 1e-300)
-        for x in walk:
-            nrm_of[x] = unit
+                walk = loop[s + 1:] + loop[:s]  # f1..fk: the loop after the attachment vertex
+                polys[k] = polys[k][:i + 1] + tuple(walk) + (m,) + polys[k][i + 1:]
+                at.append(m)
+            else:  # hanging at several hole vertices: the fragment cuts its hole into pieces, or joins
+                # the holes it touches (a piece of surface spanning between them, like a wide bridge)
+                walk = [x for x in loop if x not in to_hole]
+                sub = {h: j for j, h in enumerate(holes)}
+                pieces = _walk_around([polys[h] for h in holes], [to_hole.get(x, x) for x in loop],
+                                      set(to_hole.values()),
+                                      {to_hole[a]: (sub[k], i) for a, (k, i) in passes.items()})
+                for h in holes:
+                    polys[h] = ()  # () : replaced (or closed by the fragment), dropped below
+                polys += pieces
+                src += [src[passes[attach[0]][0]]] * len(pieces)
+                # joining holes at single vertices the walk passes them twice: bridged like a single
+                # attachment's pinch (fragment_bridge)
+                at += [m for m in to_hole.values() if any(q.count(m) > 1 for q in pieces)]
+            mapped = faces.copy()
+            for a, m in to_hole.items():  # the attachment vertices as the holes number them
+                mapped[faces == a] = m
+            out_f.append(mapped)
+            in_ids += fids
+            flips += [flip] * len(fids)
+            unit = fn / max(float(np.linalg.norm(fn)), 1e-300)
+            for x in walk:
+                nrm_of[x] = unit
+            walked.update(int(x) for x in np.unique(faces))
+        if len(in_ids) == attached_before:  # nothing attached in this round: the rest hang nowhere
+            notes += [f"fragment of face(s) {fids} left aside: not hanging at hole vertices" for fids, _ in waiting]
+            break
+        todo = waiting
     # fragments that touch each other at a vertex (a chain of fragments across the hole): the walk
     # passes that vertex twice, once on each fragment's loop; the chain cuts the hole in two there
     pieces: list[tuple[int, ...]] = []

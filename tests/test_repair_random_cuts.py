@@ -10,6 +10,7 @@ not a closed manifold or lost input faces, rebuilt here from their parameters:
   the second was left out (one fragment per vertex), an input face lost;
 - a bare bridge that is an edge of a hole still to darn: the hole darned before it may not use it
   as a chord (annulus 2:1, and a unit case of the darning loop's pending edges);
+- annulus 3:0: a fragment touching only other fragments was left out;
 - featuretype 3:0: a bare crease chord from a copy of a vertex to its neighbour (four faces)."""
 
 from __future__ import annotations
@@ -152,6 +153,22 @@ def annulus_cut(balls, slab, free_points: int, seed: int):
     m = trimesh.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96).subdivide().subdivide()
     return random_cut(Mesh(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)), balls, slab,
                       free_points, seed)
+
+
+def test_a_fragment_hanging_only_at_other_fragments_is_kept():
+    """trimesh annulus cut 3:0 (four balls and a slab, 100 free points): a one-face fragment
+    touches only two other fragments, which hang at the surface; it was left out (no vertex of the
+    kept surface). It waits until they are in the walks, then hangs at their vertices."""
+    model = annulus_cut([(5751, 0.15994703509130448), (984, 0.13203909253708052), (1842, 0.2872712820654076),
+                         (3745, 0.3098910777932432)],
+                        ([0.3463090649084199, -0.906000370240109, -0.24337904734598875], -0.6997651383159238,
+                         0.09070772801857989), 100, 3)
+    frag = [s.face for s in model.set_aside if s.reason.startswith("fragment")]
+    assert len(frag) == 12
+    res = repair(model, RepairParams(field=FieldParams(mode="full")))
+    assert res.attached is not None and sorted(res.attached.input_faces) == sorted(frag)
+    assert_closed_manifold(res, genus=1)
+    assert_input_kept(model, res.mesh, fragments=True)
 
 
 def test_bare_crease_chord_to_a_copy_of_an_edge_end_gets_a_vertex():
