@@ -929,8 +929,8 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
         pts = straight.points
         a, c = V[poly[straight.i]], V[poly[straight.j]]
         L = float(np.linalg.norm(c - a))
-        edge = _is_edge(work.F(), poly[straight.i], poly[straight.j], origin)
-        if 0 < L < 1.5 * spacing and not edge:
+        vi, vj = poly[straight.i], poly[straight.j]
+        if 0 < L < 1.5 * spacing and not _is_edge(work.F(), vi, vj):
             u = (c - a) / L
             off = np.linalg.norm((pts - a) - np.outer((pts - a) @ u, u), axis=1)
             if off.max(initial=0.0) <= 1e-3 * L:
@@ -938,10 +938,13 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
                 # halve an edge already shorter than the spacing (featuretype: 0.019 chain edges
                 # beside 0.25 border edges, 3 degree triangles)
                 pts = pts[:0]
-        if not len(pts) and edge:
-            # a bare crease chord between the ends of an edge, or copies of them, is that edge once
-            # the copies merge (featuretype random cut 3:0: from a copy of a vertex to its
-            # neighbour along their input edge, four faces): one vertex midway, as for split chords
+        if not len(pts) and (_is_edge(work.F(), vi, vj) or _edge_faces(work.F(), vi, vj, origin) >= 2):
+            # a bare crease chord between the ends of an edge is that edge; between copies of the
+            # ends of an inner edge (two faces), it is that edge once the copies merge (featuretype
+            # random cut 3:0: from a copy of a vertex to its neighbour along their input edge, four
+            # faces): one vertex midway, as for split chords. Along a border edge between copies,
+            # the bare chord closes the slit between them as the copies merge (featuretype-hole: a
+            # vertex on it made a 0 degree corner)
             pts = ((a + c) / 2)[None]
         b, ids = chain(straight.i, straight.j, pts, straight.quality, poly)
         for v in (poly[straight.i], poly[straight.j]):
@@ -967,6 +970,16 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     for v in (poly[cs.i], poly[cs.j], vk):
         ends.use(v)
     return [b1, b2], [other, h1, h2], [ids1, ids2]
+
+
+def _edge_faces(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None) -> int:
+    """How many faces have an edge between a and b or between copies of them (``origin``: each
+    model vertex's input vertex)."""
+    if origin is not None:
+        n = len(origin)
+        F = np.where(F < n, origin[np.minimum(F, n - 1)], F)
+        a, b = (int(origin[v]) if v < n else v for v in (a, b))
+    return int(((F == a).any(axis=1) & (F == b).any(axis=1)).sum())
 
 
 def _is_edge(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None = None) -> bool:
