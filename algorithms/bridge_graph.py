@@ -199,9 +199,12 @@ class GraphState:
     _samples: list[NDArray[np.float64]] = field(default_factory=list)
     _owner: list[NDArray[np.int64]] = field(default_factory=list)
 
-    def conflict(self, b: Bridge, *, neighbourhood: float | None = None) -> str | None:
+    def conflict(self, b: Bridge, *, neighbourhood: float | None = None, near_ends: bool = True) -> str | None:
         """Why ``b`` conflicts with the kept bridges, or None. ``neighbourhood``: the duplicate
-        distance for this bridge (default the rules')."""
+        distance for this bridge (default the rules'). ``near_ends`` False: the clearance is not
+        tested within a clearance of an end of the bridge that lies at least a quarter of its loop
+        from every kept bridge's end on that loop (two bridges to opposite sides of a small loop,
+        a through-hole's rim, come closer than a clearance near it by necessity)."""
         near = self.rules.neighbourhood if neighbourhood is None else neighbourhood
         if b.start == b.end:
             return "starts and ends at the same vertex"
@@ -232,6 +235,10 @@ class GraphState:
         if self.kept:
             pts = _dense(b.polyline(self.vertices), self.rules.clearance / 2)
             inner = pts[1:-1] if len(pts) > 2 else pts[:0]
+            if not near_ends and len(inner):
+                for v, end in ((b.start, pts[0]), (b.end, pts[-1])):
+                    if self._apart_on_loop(v):
+                        inner = inner[np.linalg.norm(inner - end, axis=1) >= self.rules.clearance]
             if len(inner):
                 allp = np.vstack(self._samples)
                 tree = cKDTree(allp)
@@ -239,6 +246,17 @@ class GraphState:
                 if (d < self.rules.clearance).any():
                     return "crosses or runs too close to a kept bridge"
         return None
+
+    def _apart_on_loop(self, v: int) -> bool:
+        """Whether every kept bridge's end on v's loop is at least a quarter of the loop from v."""
+        lv, iv = self.loop_of[v]
+        n = self.loop_sizes[lv]
+        for k in self.kept:
+            for w in (k.start, k.end):
+                lw, iw = self.loop_of[w]
+                if lw == lv and min(abs(iv - iw), n - abs(iv - iw)) < n / 4:
+                    return False
+        return True
 
     def add(self, b: Bridge) -> None:
         pts = _dense(b.polyline(self.vertices), self.rules.clearance / 2)
