@@ -131,9 +131,7 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
                 continue
             loop = [int(x) for x in boundary_loops(faces)[0]]
             where = occurrences()
-            # a second fragment at a vertex goes into the pass (sector) of the walk that holds it: the
-            # first one's loop made the walk pass that vertex twice (_sector)
-            if not attach or any(not where.get(a) for a in attach):
+            if any(not where.get(a) for a in attach):
                 notes.append(f"{label} left aside: not hanging at hole vertices")
                 continue
             if any(a not in loop for a in attach):
@@ -141,8 +139,8 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
                 continue
             # the pass of the holes' walks each attachment vertex joins: the only one, or, where the
             # holes pass the vertex more than once (a pinch of the kept surface, the ends of two walks,
-            # a bare bridge), the one whose gap holds the fragment, in the hole its chained neighbours
-            # went into if they did
+            # a bare bridge, a fragment attached there before), the one whose gap holds the fragment,
+            # in the hole its chained neighbours went into if they did
             own = set(np.unique(faces).tolist()) - set(attach)
             passes: dict[int, tuple[int, int]] = {}  # fragment vertex -> (polygon, position) of its pass
             for a in attach:

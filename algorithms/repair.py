@@ -974,7 +974,7 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     return [b1, b2], [other, h1, h2], [ids1, ids2]
 
 
-def _edge_faces(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None) -> int:
+def _edge_faces(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None = None) -> int:
     """How many faces have an edge between a and b or between copies of them (``origin``: each
     model vertex's input vertex)."""
     if origin is not None:
@@ -987,12 +987,7 @@ def _edge_faces(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] 
 def _is_edge(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None = None) -> bool:
     """Whether some face has the edge (a, b); with ``origin`` (each model vertex's input vertex),
     an edge between copies of a and b counts too."""
-    if origin is not None:
-        n = len(origin)
-        F = np.where(F < n, origin[np.minimum(F, n - 1)], F)
-        a, b = (int(origin[v]) if v < n else v for v in (a, b))
-    rows = F[(F == a).any(axis=1)]
-    return bool((rows == b).any())
+    return _edge_faces(F, a, b, origin) > 0
 
 
 def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:
