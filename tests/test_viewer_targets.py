@@ -110,7 +110,9 @@ def test_gui_never_blocked_while_a_recompute_runs(qtbot, win):
     print(f"edit to result {(landed[0] - t0) * 1000:.0f} ms, job {(landed[0] - started[0]) * 1000:.0f} ms: "
           f"{len(run)} heartbeats, longest gap {gaps.max() * 1000:.0f} ms; drawing the result "
           f"{landing * 1000:.0f} ms (load {load()})")
-    assert landed[0] - started[0] > 0.1 and len(run) > 5  # a real recompute ran
+    # a real recompute ran, with the heartbeat running through it (the job now takes about 0.25 s
+    # here, of which the landing about 0.2 s: 5 beats before it, so more than 5 failed at random)
+    assert landed[0] - started[0] > 0.1 and len(run) >= 3
     assert gaps.max() < 0.1, gaps.max()
 
 
