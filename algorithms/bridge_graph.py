@@ -19,6 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from .topology import edge_table
+
 
 @dataclass(frozen=True, eq=False)
 class Bridge:
@@ -99,9 +101,7 @@ class BoundaryEdges:
         # faces: the surface's faces, for ``is_edge``
         self._face_edges: set[tuple[int, int]] = set()
         if faces is not None and len(faces):
-            f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-            fe = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-            self._face_edges = set(map(tuple, np.unique(fe, axis=0).tolist()))
+            self._face_edges = set(map(tuple, edge_table(np.asarray(faces, dtype=np.int64)).edges.tolist()))
         e = [np.stack([lp, np.roll(lp, -1)], axis=1) for lp in loops if len(lp) >= 2]
         self.edges = np.concatenate(e).astype(np.int64) if e else np.zeros((0, 2), dtype=np.int64)
         p = np.asarray(vertices, dtype=np.float64)

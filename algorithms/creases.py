@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .bridge_graph import resample_chain
+from .bridge_graph import resample_chain, segment_distance
 from .topology import edge_table, face_adjacency
 
 
@@ -408,9 +408,8 @@ def passes_near(p0: NDArray[np.float64], pts: NDArray[np.float64], p1: NDArray[n
     si, qi = np.nonzero(near)
     if not len(si):
         return False
-    dd = (d[si] * d[si]).sum(1)
-    t = np.clip(((q[qi] - a[si]) * d[si]).sum(1) / np.maximum(dd, 1e-300), 0.0, 1.0)
-    return bool((np.linalg.norm(a[si] + t[:, None] * d[si] - q[qi], axis=1) <= tol).any())
+    # a point is a segment of length zero
+    return bool((segment_distance(a[si], a[si] + d[si], q[qi], q[qi]) <= tol).any())
 
 
 def _interleaved(a: tuple[int, int], b: tuple[int, int]) -> bool:
