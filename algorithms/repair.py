@@ -584,12 +584,10 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             apart = mask[glob[sub_f]].any(axis=1)
         local = {int(g): k for k, g in enumerate(glob)}
         # the edges of holes still to darn (bare bridges between two of them) are edges of the
-        # output as much as the faces are: no chord may duplicate one (as degenerate faces (a, b, b)
-        # among ``apart``, which count as existing edges only)
-        later = np.asarray([(local[a], local[b], local[b]) for a, b in pending.among(poly)],
-                           dtype=np.int64).reshape(-1, 3)
+        # output as much as the faces are: no chord may duplicate one
+        later = np.asarray([(local[a], local[b]) for a, b in pending.among(poly)], dtype=np.int64).reshape(-1, 2)
         patch = darn(sub_v, sub_f[~apart], np.asarray([local[p] for p in poly], dtype=np.int64),
-                     method=params.darning, weight=params.weight, apart=np.vstack([sub_f[apart], later]))
+                     method=params.darning, weight=params.weight, apart=sub_f[apart], edges=later)
         ids = work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
         to_global = np.concatenate([glob, ids])
         if len(patch.merged):  # a pinched hole: the copies of a split vertex on its border are one vertex again

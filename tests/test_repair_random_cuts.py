@@ -233,3 +233,18 @@ def test_clearance_near_ends_apart_on_their_loop():
     assert state.conflict(bridge(2), near_ends=False) is None
     # one vertex apart on both loops: never exempt
     assert state.conflict(bridge(1), near_ends=False) is not None
+
+
+def test_darn_keeps_off_edges_that_no_face_has_yet():
+    from algorithms.darning import darn
+
+    # a kite: the short diagonal 1-3 is the minimum-length choice; given as an edge, 0-2 is taken
+    V = np.array([[0, 0, 0], [1, -0.3, 0], [2, 0, 0], [1, 0.3, 0]], dtype=float)
+    loop = np.array([0, 1, 2, 3])
+    free = darn(V, np.zeros((0, 3), dtype=np.int64), loop, method="liepa", weight="length")
+    diag = lambda faces: {tuple(sorted(e)) for f in faces for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))} - {  # noqa: E731
+        (0, 1), (1, 2), (2, 3), (0, 3)}
+    assert diag(free.faces) == {(1, 3)}
+    kept = darn(V, np.zeros((0, 3), dtype=np.int64), loop, method="liepa", weight="length",
+                edges=np.array([[3, 1]]))
+    assert diag(kept.faces) == {(0, 2)}

@@ -175,7 +175,8 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
          method: str = DEFAULT_METHOD, weight: str = "area", density: float = float(np.sqrt(2.0)),
          fairing: str = "U3", fair_weights: str = "cotan", fair_rounds: int = 2, smooth: int = 5,
          fair_iterations: int = 1,
-         forbid_existing: bool = True, apart: NDArray[np.int64] | None = None) -> Patch:
+         forbid_existing: bool = True, apart: NDArray[np.int64] | None = None,
+         edges: NDArray[np.int64] | None = None) -> Patch:
     """Fill the hole bounded by ``loop`` (vertex indices in the loop's positive direction).
 
     vertices (V, 3), faces (F, 3): the surface around the hole (never modified).
@@ -199,6 +200,8 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     apart: (K, 3) faces of the surface across a sharp crease from this hole (algorithms.creases):
         they count as existing edges (no chord, split or flip may duplicate one) but neither the
         edge-length scale nor the fairing reads them, so the patch does not round the crease off.
+    edges: (K, 2) edges of the surface that no face has yet (the bare bridges of holes still to
+        darn, whose faces come later): existing edges too, for the same checks only.
     """
     _check(method, weight, fairing, fair_weights)
     v = np.asarray(vertices, dtype=np.float64)
@@ -210,6 +213,11 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     if lp.min() < 0 or lp.max() >= len(v):
         raise ValueError("loop vertex index out of range")
     nv = len(v)
+    if edges is not None and len(edges):  # as degenerate faces (a, b, b) among ``apart``: the
+        # existing-edge checks read the edges of faces
+        e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+        apart = np.vstack([np.asarray(apart, dtype=np.int64).reshape(-1, 3) if apart is not None
+                           else np.zeros((0, 3), dtype=np.int64), e[:, [0, 1, 1]]])
     pairs = pinches(v, lp)
     if len(pairs):  # a pinched loop: its simple parts one after another, the copies joined
         return _darn_parts(v, f, lp, pairs, apart, dict(
