@@ -197,7 +197,7 @@ class GraphState:
     kept: list[Bridge] = field(default_factory=list)
     boundary: BoundaryEdges | None = None  # the loops' edges no bridge may run along (None: not tested)
     _samples: list[NDArray[np.float64]] = field(default_factory=list)
-    _owner: list[NDArray[np.int64]] = field(default_factory=list)
+    _tree: cKDTree | None = None  # over the kept bridges' samples, built when first needed after an add
 
     def conflict(self, b: Bridge, *, neighbourhood: float | None = None, near_ends: bool = True) -> str | None:
         """Why ``b`` conflicts with the kept bridges, or None. ``neighbourhood``: the duplicate
@@ -240,9 +240,9 @@ class GraphState:
                     if self._apart_on_loop(v):
                         inner = inner[np.linalg.norm(inner - end, axis=1) >= self.rules.clearance]
             if len(inner):
-                allp = np.vstack(self._samples)
-                tree = cKDTree(allp)
-                d, _ = tree.query(inner, k=1)
+                if self._tree is None:
+                    self._tree = cKDTree(np.vstack(self._samples))
+                d, _ = self._tree.query(inner, k=1)
                 if (d < self.rules.clearance).any():
                     return "crosses or runs too close to a kept bridge"
         return None
@@ -262,6 +262,7 @@ class GraphState:
         pts = _dense(b.polyline(self.vertices), self.rules.clearance / 2)
         self.kept.append(b)
         self._samples.append(pts[1:-1] if len(pts) > 2 else pts)
+        self._tree = None
 
 
 def walk_holes(loops: list[NDArray[np.int64]], bridges: list[Bridge],
