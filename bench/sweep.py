@@ -17,6 +17,7 @@ Not part of the test suite (minutes per seed); compare two runs' --out files wit
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
 from pathlib import Path
@@ -101,13 +102,14 @@ def make_cut(model: str, seed: int, it: int) -> BenchCase:
                      c.description)
 
 
-_CACHE: dict[str, Mesh] = {}
-
-
+@functools.cache
 def _model(name: str) -> Mesh:
-    if name not in _CACHE:
-        _CACHE[name] = MODELS[name][0]()
-    return _CACHE[name]
+    return MODELS[name][0]()
+
+
+def _load(path: str) -> list[dict]:
+    """The rows of an --out file."""
+    return [json.loads(x) for x in Path(path).read_text().splitlines()]
 
 
 def _seeds(text: str) -> list[int]:
@@ -132,7 +134,7 @@ def _row_text(r: dict) -> str:
 def compare(old: str, new: str) -> None:
     """Print the rows whose topology, kept share or Hausdorff changed between two --out files."""
     def rows(p: str) -> dict:
-        return {(r["case"], r["method"]): r for r in map(json.loads, Path(p).read_text().splitlines())}
+        return {(r["case"], r["method"]): r for r in _load(p)}
 
     a, b = rows(old), rows(new)
     for k in sorted(set(a) & set(b)):
@@ -219,8 +221,7 @@ def main(argv: list[str] | None = None) -> int:
     if a.from_json:
         from bench.report import write_section
 
-        rows = [json.loads(x) for x in Path(a.from_json).read_text().splitlines()]
-        text = markdown(rows, _command(a))
+        text = markdown(_load(a.from_json), _command(a))
         if a.write:
             write_section("sweep", text)
         print(text)

@@ -92,14 +92,9 @@ def test_tunnel_between_two_small_loops_keeps_two_bridges():
 def balls_and_slab(balls, normal, offset, width, *, seed, mode, free_points=100):
     """Featuretype cut by balls (centre, radius) and a slab |n.x - offset| < width / 2 (the sweep's
     random cuts, rebuilt from their parameters), normalised and repaired: (model, result)."""
-    part = Mesh(*load_raw(data_file("featuretype.stl")))
-    c = face_centroids(part)
-    remove = np.zeros(part.n_faces, dtype=bool)
-    for p, r in balls:
-        remove |= np.linalg.norm(c - np.array(p), axis=1) < r
-    remove |= np.abs(c @ np.array(normal) - offset) < width / 2
-    case = cut(part, remove, name="featuretype balls and a slab", description="", free_points=free_points, seed=seed)
-    model = normalize(case.incomplete.vertices, case.incomplete.faces, extra_points=case.free_points)
+    from test_repair_random_cuts import random_cut
+
+    model = random_cut("featuretype.stl", balls, (normal, offset, width), free_points, seed)
     return model, repair(model, RepairParams(field=FieldParams(mode=mode)))
 
 

@@ -32,13 +32,14 @@ from algorithms.topology import edge_table
 
 
 def random_cut(name: str | Mesh, balls, slab, free_points: int, seed: int):
-    """The sweep's cut: balls (vertex, radius) of faces and a slab (normal, offset, width) removed
-    from a shared model (by file name) or a mesh."""
+    """The sweep's cut: balls (centre, radius) of faces, the centre a vertex index or a point, and a
+    slab (normal, offset, width) removed from a shared model (by file name) or a mesh."""
     part = name if isinstance(name, Mesh) else Mesh(*load_raw(data_file(name)))
     c = face_centroids(part)
     remove = np.zeros(part.n_faces, dtype=bool)
     for v, r in balls:
-        remove |= np.linalg.norm(c - part.vertices[v], axis=1) < r
+        centre = part.vertices[v] if np.ndim(v) == 0 else np.asarray(v, dtype=np.float64)
+        remove |= np.linalg.norm(c - centre, axis=1) < r
     if slab is not None:
         n, offset, width = slab
         remove |= np.abs(c @ np.asarray(n) - offset) < width / 2
