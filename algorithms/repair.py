@@ -393,19 +393,37 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             # two small loops one neighbourhood)
             radius = {k: params.neighbourhood_factor * loop_radius(frames[k]) for k in free_loops}
             by_pair: dict[tuple[int, int], list[tuple[Bridge, ForceLine]]] = {}
+            dups: dict[tuple[int, int], list[tuple[Bridge, ForceLine]]] = {}
             for b, ln in as_bridges(list(tl.lines), "tunnel"):
                 n_arrived += 1
-                ends = [radius.get(loop_of[v][0], wide) for v in (b.start, b.end)]
+                near = min(wide, *[radius.get(loop_of[v][0], wide) for v in (b.start, b.end)])
+                pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
                 # nor the clearance near their ends: a small loop (a through-hole's rim) cannot
                 # take two bridges a clearance apart there (featuretype random cut 4:1: genus 8)
-                why = trial.conflict(b, neighbourhood=min(wide, *ends), near_ends=False)
+                why = trial.conflict(b, neighbourhood=near, near_ends=False)
                 if why is None:
                     trial.add(b)
-                    pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
                     by_pair.setdefault(pair, []).append((b, ln))  # type: ignore[arg-type]
                 else:
                     rejected.append((b.candidate, why))
+                    if "same neighbourhood" in why:
+                        dups.setdefault(pair, []).append((b, ln, near))  # type: ignore[arg-type]
             for pair, kept_pair in by_pair.items():
+                if len(kept_pair) == 1:
+                    # the rule found a tunnel, and a tunnel needs two bridges: if its other lines ran side
+                    # by side with the first, in its neighbourhood, the second is the one whose ends lie
+                    # farthest from the first's and passes every other test (featuretype random cut 3:0,
+                    # full mode). Not a line that duplicated another bridge: the conflicts left one
+                    # bridge of a tunnel the rule found on the bunny (bunny:1:0, full mode: genus 1)
+                    first = kept_pair[0][0]
+                    gaps = [(_end_gaps(state.vertices, first, b), b, ln, near) for b, ln, near in dups.get(pair, [])]
+                    apart = sorted(((g, b, ln) for g, b, ln, near in gaps if g.max() < near), key=lambda c: -c[0].min())
+                    for _, b, ln in apart:
+                        if trial.conflict(b, neighbourhood=0.0, near_ends=False) is None:
+                            trial.add(b)
+                            kept_pair.append((b, ln))
+                            rejected[:] = [r for r in rejected if r[0] != b.candidate]
+                            break
                 if len(kept_pair) >= 2:
                     for b, ln in kept_pair:
                         keep(b, ln)
@@ -730,6 +748,14 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     return RepairResult(out, model, params, class_found, tuple(bridges), tuple(lines), tuple(rejected),
                         tuple(records), tuple(stages), new_faces, timings, lc_used,
                         timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "), attached)
+
+
+def _end_gaps(vertices: NDArray[np.float64], a: Bridge, b: Bridge) -> NDArray[np.float64]:
+    """The distances between the ends of two bridges between the same two loops, (2,): each end of
+    ``a`` paired with an end of ``b`` the way that makes the pairs nearer (whichever way ``b`` runs)."""
+    pa, pb = vertices[[a.start, a.end]], vertices[[b.start, b.end]]
+    same, swap = np.linalg.norm(pa - pb, axis=1), np.linalg.norm(pa - pb[::-1], axis=1)
+    return same if same.sum() <= swap.sum() else swap
 
 
 class _PendingEdges:

@@ -183,6 +183,19 @@ def test_bare_crease_chord_to_a_copy_of_an_edge_end_gets_a_vertex():
     assert_input_kept(model, res.mesh, fragments=True)
 
 
+def test_tunnel_whose_lines_run_side_by_side_gets_two_bridges():
+    """The same cut in full mode: the rule finds a tunnel between a 72- and a 40-vertex loop, but its
+    six lines run side by side, all in one neighbourhood of the best one: the pair was "left with one
+    bridge" (genus 8). The second bridge is the line whose ends lie farthest from the first's."""
+    model = random_cut("featuretype.stl", [(182, 0.5074603324036662), (706, 0.32986817469764274),
+                                           (1408, 0.36487589243898894)], None, 0, 3)
+    res = repair(model, RepairParams(field=FieldParams(mode="full")))
+    assert not any("left with one bridge" in why for _, why in res.rejected)
+    assert sum(b.kind == "tunnel" for b in res.bridges) == 4
+    assert_closed_manifold(res, genus=9)
+    assert_input_kept(model, res.mesh, fragments=True)
+
+
 def test_tunnel_to_a_small_loop_keeps_its_second_bridge():
     """featuretype 4:1 (three balls, 100 free points): a lost handle between a 69-vertex loop and a
     7-vertex rim (loop radius 0.55, the clearance 1.06). The second tunnel line ends on the far
