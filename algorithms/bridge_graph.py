@@ -221,13 +221,8 @@ class GraphState:
                         if d < self.rules.endpoint_gap:
                             return f"shares an endpoint neighbourhood with bridge {k.start}-{k.end}"
             ka, kb = self.loop_of[k.start][0], self.loop_of[k.end][0]
-            if {ka, kb} == {la, lb}:
-                pa, pb = self.vertices[b.start], self.vertices[b.end]
-                qa, qb = self.vertices[k.start], self.vertices[k.end]
-                if ka != la:
-                    qa, qb = qb, qa
-                if np.linalg.norm(pa - qa) < near and np.linalg.norm(pb - qb) < near:
-                    return f"duplicates bridge {k.start}-{k.end} in the same neighbourhood"
+            if {ka, kb} == {la, lb} and (self.end_distances(b, k) < near).all():
+                return f"duplicates bridge {k.start}-{k.end} in the same neighbourhood"
         if self.boundary is not None and self.boundary.is_edge(b):
             return "is an edge of the surface already"
         if self.boundary is not None and self.boundary.runs_along(b, self.vertices, self.rules.along):
@@ -246,6 +241,15 @@ class GraphState:
                 if (d < self.rules.clearance).any():
                     return "crosses or runs too close to a kept bridge"
         return None
+
+    def end_distances(self, b: Bridge, k: Bridge) -> NDArray[np.float64]:
+        """(2,) the distances between the ends of two bridges that join the same two loops: b's start
+        to k's end on the same loop, and b's end to k's other end."""
+        pa, pb = self.vertices[b.start], self.vertices[b.end]
+        qa, qb = self.vertices[k.start], self.vertices[k.end]
+        if self.loop_of[k.start][0] != self.loop_of[b.start][0]:
+            qa, qb = qb, qa
+        return np.array([np.linalg.norm(pa - qa), np.linalg.norm(pb - qb)])
 
     def _apart_on_loop(self, v: int) -> bool:
         """Whether every kept bridge's end on v's loop is at least a quarter of the loop from v."""

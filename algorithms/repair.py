@@ -393,7 +393,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             # two small loops one neighbourhood)
             radius = {k: params.neighbourhood_factor * loop_radius(frames[k]) for k in free_loops}
             by_pair: dict[tuple[int, int], list[tuple[Bridge, ForceLine]]] = {}
-            dups: dict[tuple[int, int], list[tuple[Bridge, ForceLine]]] = {}
+            dups: dict[tuple[int, int], list[tuple[Bridge, ForceLine, float]]] = {}  # same-neighbourhood lines
             for b, ln in as_bridges(list(tl.lines), "tunnel"):
                 n_arrived += 1
                 near = min(wide, *[radius.get(loop_of[v][0], wide) for v in (b.start, b.end)])
@@ -415,8 +415,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                     # farthest from the first's and passes every other test (featuretype random cut 3:0,
                     # full mode). Not a line that duplicated another bridge: the conflicts left one
                     # bridge of a tunnel the rule found on the bunny (bunny:1:0, full mode: genus 1)
-                    first = kept_pair[0][0]
-                    gaps = [(_end_gaps(state.vertices, first, b), b, ln, near) for b, ln, near in dups.get(pair, [])]
+                    gaps = [(trial.end_distances(b, kept_pair[0][0]), b, ln, near)
+                            for b, ln, near in dups.get(pair, [])]
                     apart = sorted(((g, b, ln) for g, b, ln, near in gaps if g.max() < near), key=lambda c: -c[0].min())
                     for _, b, ln in apart:
                         if trial.conflict(b, neighbourhood=0.0, near_ends=False) is None:
@@ -748,14 +748,6 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     return RepairResult(out, model, params, class_found, tuple(bridges), tuple(lines), tuple(rejected),
                         tuple(records), tuple(stages), new_faces, timings, lc_used,
                         timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "), attached)
-
-
-def _end_gaps(vertices: NDArray[np.float64], a: Bridge, b: Bridge) -> NDArray[np.float64]:
-    """The distances between the ends of two bridges between the same two loops, (2,): each end of
-    ``a`` paired with an end of ``b`` the way that makes the pairs nearer (whichever way ``b`` runs)."""
-    pa, pb = vertices[[a.start, a.end]], vertices[[b.start, b.end]]
-    same, swap = np.linalg.norm(pa - pb, axis=1), np.linalg.norm(pa - pb[::-1], axis=1)
-    return same if same.sum() <= swap.sum() else swap
 
 
 class _PendingEdges:
