@@ -262,3 +262,17 @@ def test_darn_keeps_off_edges_that_no_face_has_yet():
     kept = darn(V, np.zeros((0, 3), dtype=np.int64), loop, method="liepa", weight="length",
                 edges=np.array([[3, 1]]))
     assert diag(kept.faces) == {(0, 2)}
+
+
+def test_a_weak_line_among_a_tunnels_strong_ones_does_not_lose_it():
+    """featuretype 1:0 (four balls and a slab), full mode: four lines of quality 6.0-8.0 join a 49- and a
+    46-vertex loop, a fifth of 1.45 too, below a line of 5.0 across the first loop's own hole. Read as
+    "every line between them beats every other line" the handle was lost (genus 8); the lines that beat
+    every other line make the tunnel (repair_field.tunnel_pairs)."""
+    model = random_cut("featuretype.stl", [(123, 0.25921227938257363), (1702, 0.3504621584336923),
+                                           (1151, 0.3151033955581411), (1569, 0.46132624121046856)],
+                       ([-0.46001393456754125, -0.6898715034300648, -0.5589852312528766], 0.6767169457131919,
+                        0.10735621069409149), 0, 1)
+    res = repair(model, RepairParams(field=FieldParams(mode="full")))
+    assert_closed_manifold(res, genus=9)
+    assert_input_kept(model, res.mesh, fragments=True)

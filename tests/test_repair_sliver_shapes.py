@@ -113,6 +113,15 @@ def test_tunnel_rule_per_start_loop():
     assert len(chosen) == 3 and notes == ["loops 1 and 2: 3 lines join them, a tunnel"]
     # one line only: no tunnel, whatever its quality
     assert tunnel_pairs({1: [(2, line(3.0))]}, [1, 2]) == ([], [])
+    # strong lines both ways and one weak line below a line across loop 1's own hole (featuretype
+    # random cut 1:0, full mode): a tunnel of the lines above every other line; the weak one is left
+    mixed = {1: [(2, line(8.0)), (2, line(7.2)), (2, line(1.45)), (-1, line(5.0))],
+             2: [(1, line(2.9)), (1, line(2.2)), (3, line(0.89))]}
+    chosen, notes = tunnel_pairs(mixed, [1, 2, 3])
+    assert sorted(ln.quality for ln in chosen) == pytest.approx([2.2, 2.9, 7.2, 8.0]) and "a tunnel" in notes[0]
+    # only loop 2's lines win; loop 1 has lines to loop 2, all beaten: no tunnel
+    half = {1: [(2, line(1.0)), (-1, line(5.0))], 2: [(1, line(2.9)), (1, line(2.2))]}
+    assert "beaten" in tunnel_pairs(half, [1, 2])[1][0]
 
 
 def test_free_regions_and_their_reach():
