@@ -122,6 +122,10 @@ def test_tunnel_rule_per_start_loop():
     # only loop 2's lines win; loop 1 has lines to loop 2, all beaten: no tunnel
     half = {1: [(2, line(1.0)), (-1, line(5.0))], 2: [(1, line(2.9)), (1, line(2.2))]}
     assert "beaten" in tunnel_pairs(half, [1, 2])[1][0]
+    # lines one way only, one of them below a line across the start loop's own hole (trimesh annulus
+    # cut 4:1, light): no tunnel (the other loop's lines all cross its own hole)
+    one_sided = {1: [(2, line(4.8)), (2, line(4.7)), (2, line(4.35)), (-1, line(4.376))], 2: [(-1, line(1.9))]}
+    assert tunnel_pairs(one_sided, [1, 2])[0] == []
 
 
 def test_free_regions_and_their_reach():
