@@ -1,6 +1,6 @@
 """Random-cut sweep: the repair on many cuts it was not tuned on, beside MeshLib's bridge fill.
 
-    python -m bench.sweep [--seeds 1-5] [--per-seed 4] [--models a,b] [--modes light,full]
+    python -m bench.sweep [--seeds 1-10] [--per-seed 2] [--models a,b] [--modes light,full]
                           [--peers meshlib] [--only MODEL:SEED:IT] [--save DIR] [--out F.jsonl] [--write]
 
 The bench cases (bench/cases.py) are fixed; this makes new ones "the same way" (balls of faces
@@ -31,7 +31,7 @@ from bench.cases import DATA, BenchCase, ball, load, slab
 from bench.repair import meshlib_fill, ours_repair, run_isolated, score
 
 
-def _trimesh_model(kind: str) -> Mesh:
+def trimesh_model(kind: str) -> Mesh:
     """trimesh's own primitives, slivers and all (a capsule's side is one row of triangles as long
     as the capsule; the annulus' flat rings are fans of thin triangles): holes whose borders mix
     short and long edges."""
@@ -71,8 +71,8 @@ MODELS = {
     "thin-torus": (lambda: gen.torus(1.0, 0.22, 96, 24), 1),
     "peanut": (_peanut, 0),
     "flat-torus": (_flat_torus, 1),
-    "capsule": (lambda: _trimesh_model("capsule"), 0),
-    "annulus": (lambda: _trimesh_model("annulus"), 1),
+    "capsule": (lambda: trimesh_model("capsule"), 0),
+    "annulus": (lambda: trimesh_model("annulus"), 1),
     "fandisk": (lambda: load("fandisk.obj"), 0),
     "featuretype": (lambda: load("featuretype.stl"), 9),
     "torus": (lambda: load("torus.stl"), 1),
@@ -201,7 +201,7 @@ def _command(a: argparse.Namespace) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m bench.sweep", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", default="1-3", help="seeds, e.g. 1-5 or 1,4")
+    ap.add_argument("--seeds", default="1-10", help="seeds, e.g. 1-5 or 1,4")
     ap.add_argument("--per-seed", type=int, default=2, help="cuts per model and seed")
     ap.add_argument("--models", default=",".join(MODELS), help="comma-separated: " + ", ".join(MODELS))
     ap.add_argument("--modes", default="light,full")

@@ -11,7 +11,10 @@ not a closed manifold or lost input faces, rebuilt here from their parameters:
 - a bare bridge that is an edge of a hole still to darn: the hole darned before it may not use it
   as a chord (annulus 2:1, and a unit case of the darning loop's pending edges);
 - annulus 3:0: a fragment touching only other fragments was left out;
-- featuretype 3:0: a bare crease chord from a copy of a vertex to its neighbour (four faces)."""
+- featuretype 3:0: a bare crease chord from a copy of a vertex to its neighbour (four faces);
+
+and cuts whose handles were lost or spurious (featuretype 4:1, 2:1, 3:0 full, 1:0 full), by the
+tunnel trial's rules."""
 
 from __future__ import annotations
 
@@ -20,7 +23,7 @@ from conftest import data_file
 from test_repair import assert_input_kept
 
 from algorithms.bridge_graph import BoundaryEdges, Bridge
-from algorithms.cases import cut, face_centroids
+from algorithms.cases import cut
 from algorithms.creases import passes_near
 from algorithms.io import load_raw
 from algorithms.mesh import Mesh
@@ -29,20 +32,20 @@ from algorithms.normalize import normalize
 from algorithms.params import FieldParams
 from algorithms.repair import RepairParams, _PendingEdges, repair
 from algorithms.topology import edge_table
+from bench.cases import ball, slab
+from bench.sweep import trimesh_model
 
 
-def random_cut(name: str | Mesh, balls, slab, free_points: int, seed: int):
-    """The sweep's cut: balls (centre, radius) of faces, the centre a vertex index or a point, and a
-    slab (normal, offset, width) removed from a shared model (by file name) or a mesh."""
+def random_cut(name: str | Mesh, balls, slab_, free_points: int, seed: int):
+    """The sweep's cut (bench/sweep.make_cut, with its random draws written out): balls (centre,
+    radius) of faces, the centre a vertex index or a point, and a slab (normal, offset, width)
+    removed from a shared model (by file name) or a mesh."""
     part = name if isinstance(name, Mesh) else Mesh(*load_raw(data_file(name)))
-    c = face_centroids(part)
     remove = np.zeros(part.n_faces, dtype=bool)
     for v, r in balls:
-        centre = part.vertices[v] if np.ndim(v) == 0 else np.asarray(v, dtype=np.float64)
-        remove |= np.linalg.norm(c - centre, axis=1) < r
-    if slab is not None:
-        n, offset, width = slab
-        remove |= np.abs(c @ np.asarray(n) - offset) < width / 2
+        remove |= ball(part, part.vertices[v] if np.ndim(v) == 0 else np.asarray(v, dtype=np.float64), r)
+    if slab_ is not None:
+        remove |= slab(part, *slab_)
     case = cut(part, remove, name="random cut", description="", free_points=free_points, seed=seed)
     return normalize(case.incomplete.vertices, case.incomplete.faces, extra_points=case.free_points)
 
@@ -148,12 +151,9 @@ def test_darning_keeps_off_the_edges_of_holes_still_to_darn():
     assert_input_kept(model, res.mesh)
 
 
-def annulus_cut(balls, slab, free_points: int, seed: int):
-    import trimesh
-
-    m = trimesh.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96).subdivide().subdivide()
-    return random_cut(Mesh(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)), balls, slab,
-                      free_points, seed)
+def annulus_cut(balls, slab_, free_points: int, seed: int):
+    """A cut of the sweep's annulus model (trimesh's, subdivided twice)."""
+    return random_cut(trimesh_model("annulus"), balls, slab_, free_points, seed)
 
 
 def test_a_fragment_hanging_only_at_other_fragments_is_kept():
