@@ -415,9 +415,8 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                     # farthest from the first's and passes every other test (featuretype random cut 3:0,
                     # full mode). Not a line that duplicated another bridge: the conflicts left one
                     # bridge of a tunnel the rule found on the bunny (bunny:1:0, full mode: genus 1)
-                    gaps = [(trial.end_distances(b, kept_pair[0][0]), b, ln, near)
-                            for b, ln, near in dups.get(pair, [])]
-                    apart = sorted(((g, b, ln) for g, b, ln, near in gaps if g.max() < near), key=lambda c: -c[0].min())
+                    gaps = [(trial.end_distances(b, kept_pair[0][0]), b, ln, r) for b, ln, r in dups.get(pair, [])]
+                    apart = sorted(((g, b, ln) for g, b, ln, r in gaps if g.max() < r), key=lambda c: -c[0].min())
                     for _, b, ln in apart:
                         if trial.conflict(b, neighbourhood=0.0, near_ends=False) is None:
                             trial.add(b)
@@ -948,7 +947,8 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
         a, c = V[poly[straight.i]], V[poly[straight.j]]
         L = float(np.linalg.norm(c - a))
         vi, vj = poly[straight.i], poly[straight.j]
-        if 0 < L < 1.5 * spacing and not _is_edge(work.F(), vi, vj):
+        an_edge = _is_edge(work.F(), vi, vj)
+        if 0 < L < 1.5 * spacing and not an_edge:
             u = (c - a) / L
             off = np.linalg.norm((pts - a) - np.outer((pts - a) @ u, u), axis=1)
             if off.max(initial=0.0) <= 1e-3 * L:
@@ -956,7 +956,7 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
                 # halve an edge already shorter than the spacing (featuretype: 0.019 chain edges
                 # beside 0.25 border edges, 3 degree triangles)
                 pts = pts[:0]
-        if not len(pts) and (_is_edge(work.F(), vi, vj) or _edge_faces(work.F(), vi, vj, origin) >= 2):
+        if not len(pts) and (an_edge or _edge_faces(work.F(), vi, vj, origin) >= 2):
             # a bare crease chord between the ends of an edge is that edge; between copies of the
             # ends of an inner edge (two faces), it is that edge once the copies merge (featuretype
             # random cut 3:0: from a copy of a vertex to its neighbour along their input edge, four
