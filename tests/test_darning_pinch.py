@@ -13,9 +13,10 @@ from scipy.sparse.csgraph import connected_components
 
 from algorithms import metrics
 from algorithms.darning import darn, fill_holes, pinches, split_pinched
+from algorithms.metrics import topology
 from algorithms.normalize import normalize
 from algorithms.repair import repair
-from algorithms.topology import boundary_loops
+from algorithms.topology import boundary_loops, edge_table
 
 
 def test_split_pinched_cuts_off_the_innermost_part_first():
@@ -108,3 +109,57 @@ def test_repair_of_a_pinched_hole_has_one_vertex_per_point():
     q = int(np.flatnonzero(np.all(np.isclose(out.vertices, V[p], atol=1e-12), axis=1))[0])
     assert _vertex_manifold(out.faces, q)
     assert metrics.min_angles(out.vertices, out.faces[res.new_faces]).min() > 15.0
+
+
+def _frame_and_piece():
+    """A flat 6 x 6 grid's outer ring of cells (the surface around a 4 x 4 hole) and one triangle
+    inside the hole that touches the hole's border only at its corner c = (1, 1): the hole is an
+    annulus whose two borders touch at c. Returns vertices, faces (frame then triangle), the hole's
+    walk (through c twice, each pass from the frame's fan to the triangle's or back) and c."""
+    ij = np.array([(i, j) for j in range(7) for i in range(7)], dtype=float)
+    V = np.c_[ij, np.zeros(len(ij))]
+
+    def at(i, j):
+        return 7 * j + i
+
+    frame = []
+    for j in range(6):
+        for i in range(6):
+            if i in (0, 5) or j in (0, 5):
+                a, b, c, d = at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)
+                frame += [(a, b, c), (a, c, d)]
+    c = at(1, 1)
+    piece = [(c, at(3, 2), at(2, 3))]  # counter-clockwise seen from +z, like the frame
+    F = np.array(frame + piece)
+    inner = next(lp for lp in boundary_loops(np.array(frame)) if c in lp)
+    k = int(np.flatnonzero(inner == c)[0])
+    around = np.roll(inner, -k).tolist()  # c, a1, ..., ak
+    (tri,) = boundary_loops(np.array(piece))
+    t = np.roll(tri, -int(np.flatnonzero(tri == c)[0])).tolist()  # c, t1, t2
+    return V, F, np.array(around + t), c
+
+
+def test_split_pinched_keeps_a_pinch_whose_passes_are_right():
+    V, F, walk, c = _frame_and_piece()
+    # without the faces: cut at c, the triangle's own loop a part of its own (a pillow over it)
+    assert sorted(map(len, split_pinched(walk, np.zeros((0, 2), int)))) == [3, len(walk) - 3]
+    # with them: each pass of c runs from one fan to the other, and a cut would make both turn
+    # around one fan: the walk stays whole
+    (part,) = split_pinched(walk, np.zeros((0, 2), int), F)
+    assert part.tolist() == walk.tolist()
+
+
+@pytest.mark.parametrize("method", ["liepa", "liepa-fair"])
+def test_darn_fills_round_a_piece_touching_the_border(method):
+    """The annulus is filled in one, c as two corners: the patch covers the hole minus the
+    triangle (area 16 - 1.5), and c is a disc. Before, the triangle was closed by its own face
+    reversed and the whole square filled over it."""
+    V, F, walk, c = _frame_and_piece()
+    patch = darn(V, F, walk, method=method)
+    v, f = np.vstack([V, patch.new_vertices]), patch.faces
+    area = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1).sum()
+    assert area == pytest.approx(16 - 1.5, abs=1e-9)
+    every = np.vstack([F, f])
+    assert edge_table(every).counts.max() == 2
+    assert _vertex_manifold(every, c)
+    assert topology(every).components == 1

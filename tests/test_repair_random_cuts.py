@@ -19,6 +19,7 @@ tunnel trial's rules."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from conftest import data_file
 from test_repair import assert_input_kept
 
@@ -276,3 +277,19 @@ def test_a_weak_line_among_a_tunnels_strong_ones_does_not_lose_it():
     res = repair(model, RepairParams(field=FieldParams(mode="full")))
     assert_closed_manifold(res, genus=9)
     assert_input_kept(model, res.mesh, fragments=True)
+
+
+@pytest.mark.parametrize("mode", ["light", "full"])
+def test_a_chain_of_wall_slivers_touching_at_corners_is_not_closed_by_pillows(mode):
+    """featuretype 7:0 (three balls): the through-hole walls are 33:1 slivers, and the balls took
+    every other one with the cap and floor beside them. A chain of one-face pieces is left, each
+    touching the next at a top corner; the hole walks go along the chain's cap side and back along
+    its floor side, passing each corner twice, each pass from one piece to the next. The darning
+    cut the walks at those corners and closed each piece with its own face reversed: seven
+    components. Now such a pinch is filled round (darning.split_pinched, _darn_corners)."""
+    model = random_cut("featuretype.stl", [(1661, 0.2685876394735291), (596, 0.4090019105635886),
+                                           (1426, 0.2624718325897552)], None, 0, 7)
+    res = repair(model, RepairParams(field=FieldParams(mode=mode)))
+    assert_closed_manifold(res, genus=9)
+    assert_input_kept(model, res.mesh, fragments=True)
+

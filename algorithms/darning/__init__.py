@@ -25,10 +25,15 @@ rises onto it in refine -> project rounds) and ``samples.py`` (free points as sa
 missing surface: PRAF normals for the APSS, and the fill faired through the samples it missed).
 
 Pinched loops: a loop that passes twice through one point (a non-manifold vertex that
-normalisation split into copies, each copy on the loop once) is two holes joined at that point.
-``darn`` fills each part on its own with the copies taken as one vertex, and the patch records the
-copies it joined (``Patch.merged``): the filled surface is manifold there only with them merged,
-so :func:`apply_patch` renumbers the copies to the vertex they were split from (same position:
+normalisation split into copies, each copy on the loop once, or one vertex walked twice) is
+either two holes joined at that point or one hole around a piece that touches its border there.
+Which one the passes tell (:func:`split_pinched`): where the walk turns around one fan of the
+point's faces (arrives and leaves along it while the point has other fans) the loop is two holes,
+and ``darn`` fills each part on its own with the copies taken as one vertex; where each pass runs
+from one fan to another, the hole goes round the piece (an annulus whose two borders touch) and
+is filled in one, the point as two corners (``_darn_corners``). The patch records the copies it
+joined (``Patch.merged``): the filled surface is manifold there only with them merged, so
+:func:`apply_patch` renumbers the copies to the vertex they were split from (same position:
 every face keeps its vertex coordinates).
 
 Orientation: a loop is given in its positive direction (the surrounding surface has a face with
@@ -48,7 +53,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..mesh import Mesh, _frozen
-from ..topology import boundary_halfedges, boundary_loops, halfedges
+from ..topology import boundary_halfedges, boundary_loops, edge_table, halfedges
 from .fair import ORDERS, WEIGHTINGS, fair, tangential_relax
 from .fan import fan
 from .liepa import WEIGHTS, triangulate
@@ -133,24 +138,54 @@ def pinches(vertices: NDArray[np.float64], loop: NDArray[np.int64]) -> NDArray[n
     return pairs[pairs[:, 0] != pairs[:, 1]]
 
 
-def split_pinched(loop: NDArray[np.int64], pairs: NDArray[np.int64]) -> list[NDArray[np.int64]]:
-    """The simple loops of a pinched loop (copies renumbered to the vertex kept), innermost first.
+def split_pinched(loop: NDArray[np.int64], pairs: NDArray[np.int64],
+                  faces: NDArray[np.int64] | None = None) -> list[NDArray[np.int64]]:
+    """The parts of a pinched loop (copies renumbered to the vertex kept), innermost first.
 
-    The closest repeat of a vertex, positions i < j of the loop, bounds a part without repeats:
-    loop[i:j] is cut off (its closing edge runs to the copy at j) and the rest goes on through i.
-    Parts of fewer than 3 vertices need no face: their two edges are one edge once the copies are
-    merged (a slit closes).
+    The closest repeat of a vertex, positions i < j of the loop, bounds a part: loop[i:j] is cut
+    off (its closing edge runs to the copy at j) and the rest goes on through i. Parts of fewer
+    than 3 vertices need no face: their two edges are one edge once the copies are merged (a slit
+    closes).
+
+    faces: the surface around the loop (copies merged). With them, a cut must not make a pass
+    through the vertex wrong that was right (:func:`_wrong_passes`): a pass that arrives along one
+    fan of the vertex's faces and leaves along the same fan, where the vertex has other fans, turns
+    around that fan and would cover it. A chain of one-face pieces touching at their corners,
+    joined by zero-length bridges (featuretype cut by balls: a row of wall slivers), is walked
+    right at each corner, once on each side of the chain; cutting there closed every piece with
+    its own face reversed (a two-face pillow). A split torus vertex (two fans, the walk crossing
+    from one block of the hole to the other at each copy) is walked wrong, and the cut makes it
+    right. Repeats that no cut may separate stay in their part (the caller fills such a part with
+    the repeated vertex as two corners, ``_darn_parts``).
     """
     to = {int(c): int(k) for c, k in np.asarray(pairs, dtype=np.int64).reshape(-1, 2)}
     rest = [to.get(int(x), int(x)) for x in loop]
+    seen: set[int] = set()
+    repeated = {x for x in rest if x in seen or seen.add(x)}
+    fans = _fan_labels(faces, repeated) if faces is not None and repeated else {}
+
+    def wrong(p: int, x: int, q: int) -> int:
+        return _wrong_passes(fans, p, x, q)
+
     parts: list[NDArray[np.int64]] = []
     while True:
-        last: dict[int, int] = {}
         best: tuple[int, int] | None = None
+        n = len(rest)
+        where: dict[int, list[int]] = {}
         for j, x in enumerate(rest):
-            if x in last and (best is None or j - last[x] < best[1] - best[0]):
-                best = (last[x], j)
-            last[x] = j
+            where.setdefault(x, []).append(j)
+        for x, js in where.items():
+            for a in range(len(js)):
+                for b in range(a + 1, len(js)):
+                    i, j = js[a], js[b]
+                    if best is not None and j - i >= best[1] - best[0]:
+                        continue
+                    if j - i > 2 and fans:  # a part with faces: the cut re-pairs the two passes
+                        before = wrong(rest[i - 1], x, rest[i + 1]) + wrong(rest[j - 1], x, rest[(j + 1) % n])
+                        after = wrong(rest[j - 1], x, rest[i + 1]) + wrong(rest[i - 1], x, rest[(j + 1) % n])
+                        if after > before:
+                            continue
+                    best = (i, j)
         if best is None:
             break
         i, j = best
@@ -158,6 +193,48 @@ def split_pinched(loop: NDArray[np.int64], pairs: NDArray[np.int64]) -> list[NDA
         rest = rest[:i] + rest[j:]
     parts.append(np.asarray(rest, dtype=np.int64))
     return [p for p in parts if len(p) >= 3]
+
+
+def _fan_labels(faces: NDArray[np.int64], verts: set[int]) -> dict[int, tuple[int, dict[int, int]]]:
+    """For each vertex of ``verts``: (number of fans of its faces, neighbour -> fan of the edge to
+    it, -1 where the edge has two or more faces). A fan: faces around the vertex joined by edges."""
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    out: dict[int, tuple[int, dict[int, int]]] = {}
+    for x in verts:
+        star = f[(f == x).any(axis=1)]
+        if not len(star):
+            continue
+        others = [[int(y) for y in t if y != x] for t in star]
+        parent = list(range(len(star)))
+
+        def root(k: int) -> int:
+            while parent[k] != k:
+                parent[k] = parent[parent[k]]
+                k = parent[k]
+            return k
+
+        first: dict[int, int] = {}
+        count: dict[int, int] = {}
+        for k, ys in enumerate(others):
+            for y in ys:
+                count[y] = count.get(y, 0) + 1
+                if y in first:
+                    parent[root(k)] = root(first[y])
+                else:
+                    first[y] = k
+        labels = {root(k) for k in range(len(star))}
+        out[x] = (len(labels), {y: (root(k) if count[y] == 1 else -1) for y, k in first.items()})
+    return out
+
+
+def _wrong_passes(fans: dict[int, tuple[int, dict[int, int]]], p: int, x: int, q: int) -> int:
+    """1 if the walk p -> x -> q arrives and leaves along one fan of x's faces while x has other
+    fans (it turns around that fan, spec §6: the surface on the left of the walk), else 0."""
+    if x not in fans:
+        return 0
+    n, of = fans[x]
+    a, b = of.get(p, -1), of.get(q, -1)
+    return int(n >= 2 and a >= 0 and a == b)
 
 
 def _check(method: str, weight: str, fairing: str, fair_weights: str) -> None:
@@ -176,7 +253,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
          fairing: str = "U3", fair_weights: str = "cotan", fair_rounds: int = 2, smooth: int = 5,
          fair_iterations: int = 1,
          forbid_existing: bool = True, apart: NDArray[np.int64] | None = None,
-         edges: NDArray[np.int64] | None = None) -> Patch:
+         edges: NDArray[np.int64] | None = None, join_copies: bool = True) -> Patch:
     """Fill the hole bounded by ``loop`` (vertex indices in the loop's positive direction).
 
     vertices (V, 3), faces (F, 3): the surface around the hole (never modified).
@@ -202,6 +279,8 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         edge-length scale nor the fairing reads them, so the patch does not round the crease off.
     edges: (K, 2) edges of the surface that no face has yet (the bare bridges of holes still to
         darn, whose faces come later): existing edges too, for the same checks only.
+    join_copies: whether coincident loop vertices are copies to join (module docstring, "Pinched
+        loops"); False fills them as distinct corners (``_darn_parts``, a pinch no cut separates).
     """
     _check(method, weight, fairing, fair_weights)
     v = np.asarray(vertices, dtype=np.float64)
@@ -218,8 +297,10 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
         apart = np.vstack([np.asarray(apart, dtype=np.int64).reshape(-1, 3) if apart is not None
                            else np.zeros((0, 3), dtype=np.int64), e[:, [0, 1, 1]]])
-    pairs = pinches(v, lp)
-    if len(pairs):  # a pinched loop: its simple parts one after another, the copies joined
+    pairs = pinches(v, lp) if join_copies else np.zeros((0, 2), dtype=np.int64)
+    if len(pairs) or (join_copies and len(np.unique(lp)) < n):
+        # a pinched loop (copies of a vertex, or one vertex passed twice): its parts one after
+        # another, the copies joined
         return _darn_parts(v, f, lp, pairs, apart, dict(
             method=method, weight=weight, density=density, fairing=fairing, fair_weights=fair_weights,
             fair_rounds=fair_rounds, smooth=smooth, fair_iterations=fair_iterations, forbid_existing=forbid_existing))
@@ -298,18 +379,75 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
 
 def _darn_parts(v: NDArray[np.float64], f: NDArray[np.int64], lp: NDArray[np.int64], pairs: NDArray[np.int64],
                 apart: NDArray[np.int64] | None, options: dict) -> Patch:
-    """darn() of a pinched loop: each simple part (split_pinched) filled on the surface the parts
-    before it completed, the copies renumbered; one Patch for all."""
+    """darn() of a pinched loop: each part (split_pinched) filled on the surface the parts before
+    it completed, the copies renumbered; one Patch for all. A part that still passes a vertex twice
+    (no cut may separate the passes: both are right) is filled with that vertex as two corners
+    (``_darn_corners``), or, if that doubles an edge, cut there after all."""
     nv = len(v)
     cur_v, cur_f = v, merge_copies(f, pairs)
     ap = merge_copies(apart, pairs) if apart is not None and len(apart) else apart
     splits = flips = 0
-    for part in split_pinched(lp, pairs):  # sequential: each part is filled beside the previous ones
-        p = darn(cur_v, cur_f, part, apart=ap, **options)
-        cur_v, cur_f = apply_patch(cur_v, cur_f, p)
-        splits += p.splits
-        flips += p.flips
+    todo = split_pinched(lp, pairs, cur_f)
+    while todo:  # sequential: each part is filled beside the previous ones
+        part = todo.pop(0)
+        if len(np.unique(part)) < len(part):
+            done = _darn_corners(cur_v, cur_f, part, ap, options)
+            if done is None:  # the corners' fill doubles an edge: the plain cuts instead
+                todo = split_pinched(part, np.zeros((0, 2), dtype=np.int64)) + todo
+                continue
+            cur_v, cur_f, s_, f_ = done
+        else:
+            p = darn(cur_v, cur_f, part, apart=ap, **options)
+            cur_v, cur_f = apply_patch(cur_v, cur_f, p)
+            s_, f_ = p.splits, p.flips
+        splits += s_
+        flips += f_
     return Patch(cur_v[nv:], cur_f[len(f):], lp, options["method"], options["weight"], splits, flips, pairs)
+
+
+def _darn_corners(v: NDArray[np.float64], f: NDArray[np.int64], part: NDArray[np.int64],
+                  apart: NDArray[np.int64] | None, options: dict
+                  ) -> tuple[NDArray[np.float64], NDArray[np.int64], int, int] | None:
+    """Fill a loop part that passes a vertex twice, both passes right (split_pinched): the hole is
+    an annulus whose two borders touch at that vertex (a chain of pieces touching at corners, with
+    the cap on one side and the floor on the other). Each later pass gets a temporary copy of the
+    vertex, so the part is a simple polygon; no chord or flip may double an edge of the vertex
+    (the copy's edges count as existing), and the copies are joined again after. Returns (vertices,
+    faces, splits, flips) of the surface with the part filled, or None if the fill still doubles
+    an edge or makes a face with a repeated vertex."""
+    nv = len(v)
+    ids: list[int] = []
+    copies: list[tuple[int, int]] = []
+    seen: set[int] = set()
+    for x in part.tolist():
+        if x in seen:
+            copies.append((nv + len(copies), x))
+            ids.append(copies[-1][0])
+        else:
+            seen.add(x)
+            ids.append(x)
+    cp = np.asarray(copies, dtype=np.int64)
+    v2 = np.vstack([v, v[cp[:, 1]]])
+    # the edges each copy must not double: its vertex's edges, the vertex itself, the other copies
+    extra: list[tuple[int, int]] = []
+    for c, x in copies:
+        nb = np.unique(f[(f == x).any(axis=1)])
+        extra += [(c, int(y)) for y in nb if y != x] + [(c, x)]
+        extra += [(c, d) for d, y in copies if y == x and d != c]
+    e = np.asarray(extra, dtype=np.int64)
+    ap = np.vstack([np.asarray(apart, dtype=np.int64).reshape(-1, 3) if apart is not None
+                    else np.zeros((0, 3), dtype=np.int64), e[:, [0, 1, 1]]])
+    p = darn(v2, f, np.asarray(ids, dtype=np.int64), apart=ap, join_copies=False, **options)
+    v3, f3 = apply_patch(v2, f, p)
+    new = merge_copies(f3[len(f):], cp)
+    new = np.where(new >= nv + len(cp), new - len(cp), new)  # the patch's own vertices move down
+    if np.any((new[:, 0] == new[:, 1]) | (new[:, 1] == new[:, 2]) | (new[:, 0] == new[:, 2])):
+        return None
+    both = np.vstack([f, new])
+    et = edge_table(both)
+    if np.any(et.counts[np.unique(et.halfedge_edge[3 * len(f):])] > 2):
+        return None
+    return np.vstack([v, v3[nv + len(cp):]]), both, p.splits, p.flips
 
 
 def plausible(points: NDArray[np.float64], border: NDArray[np.float64], *, reach: float = 1.0) -> bool:
