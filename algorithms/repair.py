@@ -351,7 +351,13 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             else:
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
-        # components no line joined: the best straight bridge between their nearest loops
+        # components no line joined that touch at a vertex: joined there (zero-length bridges)
+        ends = {v for k in bridges for v in (k.start, k.end)}
+        for a, b in _shared_vertex_joins(model, frames, guard, ends):
+            keep(Bridge(a, b, np.zeros((0, 3)), 0.0, "island"), None)
+            notes.append(f"islands {guard.island_of[a]} and {guard.island_of[b]} joined where they touch "
+                         f"(vertex {int(model.vertex_origin[a])})")
+        # the others: the best straight bridge between their nearest loops
         for _ in range(n_isl):
             comps = list(guard.components().values())
             if len(comps) < 2:
@@ -828,6 +834,41 @@ class _Incidence:
         remap = np.full(len(V), -1, dtype=np.int64)
         remap[glob] = np.arange(len(glob))
         return V[glob], remap[F], glob
+
+
+def _shared_vertex_joins(model: Icadm, frames: list, guard: TopologyGuard,
+                         taken: set[int] = frozenset()) -> list[tuple[int, int]]:
+    """Zero-length island bridges between copies of one input vertex on the loops of islands not
+    yet joined (a spanning forest: each joins two components), at copies no kept bridge ends at
+    (``taken``: two bridges may not share an end).
+
+    Normalisation splits a vertex where separate fans meet, so islands that touch at a corner come
+    apart there. Where no force line joined them, they are joined at that corner rather than by a
+    straight bridge: the input says they meet there, and the hole walks then pass the corner once
+    on each side (darning.split_pinched). featuretype cut by balls (sweep 7:0): a chain of
+    one-face wall slivers touching at their top corners was joined by straight bridges from each
+    corner to the next-but-one, along the rim over the pieces between, and came back with pieces
+    closed on their own. Joined before the force lines, a thin-torus piece touching the rest at
+    one end lost its handle (sweep 9:1): the band of lines at its other end, which closes the
+    handle, then needed the support of a tunnel and did not have it."""
+    origin = model.vertex_origin
+    if origin is None:
+        return []
+    at: dict[int, list[int]] = {}
+    for f in frames:
+        for v in f.vertices.tolist():
+            at.setdefault(int(origin[v]), []).append(int(v))
+    out: list[tuple[int, int]] = []
+    used = set(taken)
+    for _, vs in sorted(at.items()):
+        for i, a in enumerate(vs):
+            for b in vs[i + 1:]:
+                if a in used or b in used or guard.effect(a, b) != "connect":
+                    continue
+                out.append((a, b))
+                used.update((a, b))
+                guard.add(Bridge(a, b, np.zeros((0, 3)), 0.0, "island"))
+    return out
 
 
 def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: NDArray[np.float64],

@@ -293,3 +293,19 @@ def test_a_chain_of_wall_slivers_touching_at_corners_is_not_closed_by_pillows(mo
     assert_closed_manifold(res, genus=9)
     assert_input_kept(model, res.mesh, fragments=True)
 
+
+def test_islands_touching_at_a_vertex_keep_the_handle_their_lines_close():
+    """thin torus 9:1 (a ball and a slab, 100 free points): a piece of the tube, cut off by the slab
+    on one side and the ball on the other, touches the rest at one vertex. Bands of force lines
+    join it at both ends: the first connects, the second closes the handle. Joining the islands
+    at the shared vertex before the lines (repair._shared_vertex_joins) left the second band a
+    handle without a tunnel's support: genus 0. The shared vertex joins only what no line joined."""
+    from algorithms.cases import torus
+
+    model = random_cut(torus(1.0, 0.22, 96, 24), [(1936, 0.20065688254066136)],
+                       ([-0.7253128629454553, 0.048650586734507416, 0.6866981660498703], 0.527673492238534,
+                        0.05445504388910996), 100, 9)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_closed_manifold(res, genus=1)
+    assert_input_kept(model, res.mesh, fragments=True)
+    assert not any("joined where they touch" in n for n in res.tunnel_note.split("; "))
