@@ -105,7 +105,11 @@ def loop_radius(frame: LoopFrame) -> float:
 
 
 def auto_lc(sources: Sources) -> float:
-    """L_c: mean of the smallest fifth of the nearest distances to another unit's boundary."""
+    """L_c: mean of the smallest fifth of the nearest distances to another unit's boundary.
+
+    Distances of zero are left out: islands that touch at a vertex have copies of it at one point
+    (normalisation splits it), and L_c = 0 would stop the field (random cuts of an icosphere and of
+    a subdivided box: one island touching another at a corner)."""
     groups = np.unique(sources.group)
     near = np.full(len(sources), np.inf)
     for g in groups:
@@ -114,9 +118,10 @@ def auto_lc(sources: Sources) -> float:
             continue
         d, _ = cKDTree(sources.points[~mine]).query(sources.points[mine])
         near[mine] = d
-    near = near[np.isfinite(near)]
+    tol = 1e-12 * float(np.ptp(sources.points, axis=0).max(initial=0.0))
+    near = near[np.isfinite(near) & (near > tol)]
     if not len(near):
-        raise ValueError("L_c needs at least two units (islands or loops)")
+        raise ValueError("L_c needs at least two units (islands or loops) apart")
     k = max(1, len(near) // 5)
     return float(np.mean(np.sort(near)[:k]))
 

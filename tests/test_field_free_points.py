@@ -98,3 +98,10 @@ def test_one_free_point():
     ref = q2_segment(x[0], o[0], fp.points, kt=0.5, rc=0.2, samples=8)
     np.testing.assert_allclose(q2_many(fp, x, o, exact=True), [ref], rtol=1e-3)
     assert ref < 0.6
+
+
+@pytest.mark.parametrize("rc", [0.0, -1.0, float("nan")])
+def test_a_radius_that_is_not_positive_is_refused_clearly(rc):
+    # r_c = 0 came from L_c = 0 (islands touching at a vertex) and ended in a numpy error deep inside
+    with pytest.raises(ValueError, match="r_c must be a positive number"):
+        free_points(np.zeros((4, 3)), kt=1.0, rc=rc)

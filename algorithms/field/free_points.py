@@ -59,6 +59,8 @@ class FreePoints:
 
 
 def free_points(points: NDArray[np.float64], *, kt: float, rc: float, kernel: str = "gauss") -> FreePoints:
+    if not (np.isfinite(rc) and rc > 0):
+        raise ValueError(f"free points: the radius r_c must be a positive number, got {rc!r}")
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     cut = g_cutoff(rc, kernel)
     tree = cKDTree(p) if len(p) else cKDTree(np.zeros((1, 3)))
