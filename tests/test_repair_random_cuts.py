@@ -315,8 +315,9 @@ def test_islands_touching_at_a_corner_have_a_positive_lc():
     """Two triangles that touch only at a corner: two islands whose loops have copies of that
     corner at one point. L_c (the mean of the smallest fifth of the distances between islands) was
     0 and the field refused it: random cuts of trimesh's icosphere and of a subdivided box (a ball
-    leaving an island that touches the rest at one vertex) ended in a ValueError. The zero distances
-    are left out; the islands are joined where they touch."""
+    leaving an island that touches the rest at one vertex) ended in a ValueError. The field's L_c
+    now leaves the zero distances out when they fill the smallest fifth; the islands are joined
+    where they touch."""
     from algorithms.boundary import summarize
     from algorithms.bridges import auto_lc
     from algorithms.field.indicator import sources_from_frames
@@ -324,8 +325,11 @@ def test_islands_touching_at_a_corner_have_a_positive_lc():
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0]], dtype=float)
     model = normalize(V, np.array([[0, 1, 2], [0, 3, 4]]))
     assert model.mesh.n_vertices == 6  # the corner split into two copies
-    assert auto_lc(sources_from_frames(summarize(model).loops)) == 1.0  # each other corner is 1 away
+    src = sources_from_frames(summarize(model).loops)
+    assert auto_lc(src) == 0.0  # the copies of the corner are the nearest points of each other
+    assert auto_lc(src, positive=True) == 1.0  # each other corner is 1 away
     res = repair(model)
     assert_closed_manifold(res, genus=0)
     assert "islands 0 and 1 joined where they touch (vertex 0)" in res.tunnel_note
     assert_input_kept(model, res.mesh)
+
