@@ -352,8 +352,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
         # components no line joined that touch at a vertex: joined there (zero-length bridges)
-        ends = {v for k in bridges for v in (k.start, k.end)}
-        for a, b in _shared_vertex_joins(model, frames, guard, ends):
+        for a, b in _shared_vertex_joins(model, frames, guard, {v for k in bridges for v in (k.start, k.end)}):
             keep(Bridge(a, b, np.zeros((0, 3)), 0.0, "island"), None)
             notes.append(f"islands {guard.island_of[a]} and {guard.island_of[b]} joined where they touch "
                          f"(vertex {int(model.vertex_origin[a])})")

@@ -39,9 +39,21 @@ def trimesh_model(kind: str) -> Mesh:
 
     if kind == "capsule":
         m = trimesh.creation.capsule(height=2.0, radius=0.6, count=[48, 48])
-    else:  # a thick washer: genus 1 with four sharp circular creases
+    elif kind == "annulus":  # a thick washer: genus 1 with four sharp circular creases
         m = trimesh.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96)
         m = m.subdivide().subdivide()
+    elif kind == "cylinder":  # side triangles as long as the cylinder, caps fans of slivers
+        m = trimesh.creation.cylinder(radius=0.5, height=1.5, sections=64)
+    elif kind == "cylinder-sub":  # the same, subdivided twice: its rims polygons with straight runs
+        m = trimesh.creation.cylinder(radius=0.5, height=1.5, sections=48).subdivide().subdivide()
+    elif kind == "box":  # flat faces and sharp right-angled edges, subdivided four times
+        m = trimesh.creation.box((1.0, 0.7, 0.4))
+        for _ in range(4):
+            m = m.subdivide()
+    elif kind == "icosphere":
+        m = trimesh.creation.icosphere(4)
+    else:
+        raise ValueError(f"unknown trimesh model {kind!r}")
     return Mesh(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64))
 
 
@@ -73,6 +85,10 @@ MODELS = {
     "flat-torus": (_flat_torus, 1),
     "capsule": (lambda: trimesh_model("capsule"), 0),
     "annulus": (lambda: trimesh_model("annulus"), 1),
+    "cylinder": (lambda: trimesh_model("cylinder"), 0),
+    "cylinder-sub": (lambda: trimesh_model("cylinder-sub"), 0),
+    "box": (lambda: trimesh_model("box"), 0),
+    "icosphere": (lambda: trimesh_model("icosphere"), 0),
     "fandisk": (lambda: load("fandisk.obj"), 0),
     "featuretype": (lambda: load("featuretype.stl"), 9),
     "torus": (lambda: load("torus.stl"), 1),
