@@ -609,8 +609,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         # output as much as the faces are: no chord may duplicate one
         later = np.asarray([(local[a], local[b]) for a, b in pending.among(poly)], dtype=np.int64).reshape(-1, 2)
         patch = darn(sub_v, sub_f[~apart], np.asarray([local[p] for p in poly], dtype=np.int64),
-                     method=params.darning, weight=params.weight, apart=sub_f[apart], edges=later,
-                     keep_fitting=max(poly) < n_input)
+                     method=params.darning, weight=params.weight, apart=sub_f[apart], edges=later)
         ids = work.add_vertices(patch.new_vertices, np.zeros((len(patch.new_vertices), 3)))
         to_global = np.concatenate([glob, ids])
         if len(patch.merged):  # a pinched hole: the copies of a split vertex on its border are one vertex again

@@ -333,29 +333,3 @@ def test_islands_touching_at_a_corner_have_a_positive_lc():
     assert "islands 0 and 1 joined where they touch (vertex 0)" in res.tunnel_note
     assert_input_kept(model, res.mesh)
 
-
-def test_a_fill_that_matches_its_border_is_not_refined_off_the_surface():
-    """trimesh's cylinder (its side one row of triangles as long as the cylinder) cut by a ball and a
-    slab: every other side triangle is missing over a quarter of the side. The minimum-weight fill
-    of each hole is those missing triangles; refined and faired, the points put into them moved
-    16 % of the diagonal off the side (MeshLib: 0). A fill no larger than the faces around it is
-    kept as it is (darning._fits_its_border)."""
-    import trimesh
-
-    from algorithms.metrics import point_to_surface
-
-    t = trimesh.creation.cylinder(radius=0.5, height=1.5, sections=64)
-    truth = Mesh(np.asarray(t.vertices, float), np.asarray(t.faces, np.int64))
-    model = random_cut(truth, [(76, 0.1622403034464774)],
-                       ([-0.6951223578420241, -1.6962086522258644, 0.11160103453774037], 0.4848327912220826,
-                        0.045108319747877594), 0, 1)
-    res = repair(model, RepairParams(field=FieldParams(mode="light")))
-    assert_closed_manifold(res, genus=0)
-    assert_input_kept(model, res.mesh)
-    # no point added (the copies normalisation made are joined again)
-    assert len(res.mesh.vertices) == truth.n_vertices
-    # the new faces lie on the cylinder (the side's quads are planar: either diagonal does)
-    t = res.mesh.vertices[res.mesh.faces[res.new_faces]]
-    assert len(t) > 0
-    probes = np.vstack([t.mean(axis=1), (t + np.roll(t, -1, axis=1)).reshape(-1, 3) / 2])
-    assert point_to_surface(probes, truth.vertices, truth.faces).max() < 1e-9 * truth.bbox_diagonal()

@@ -253,7 +253,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
          fairing: str = "U3", fair_weights: str = "cotan", fair_rounds: int = 2, smooth: int = 5,
          fair_iterations: int = 1,
          forbid_existing: bool = True, apart: NDArray[np.int64] | None = None,
-         edges: NDArray[np.int64] | None = None, join_copies: bool = True, keep_fitting: bool = False) -> Patch:
+         edges: NDArray[np.int64] | None = None, join_copies: bool = True) -> Patch:
     """Fill the hole bounded by ``loop`` (vertex indices in the loop's positive direction).
 
     vertices (V, 3), faces (F, 3): the surface around the hole (never modified).
@@ -281,12 +281,6 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         darn, whose faces come later): existing edges too, for the same checks only.
     join_copies: whether coincident loop vertices are copies to join (module docstring, "Pinched
         loops"); False fills them as distinct corners (``_darn_parts``, a pinch no cut separates).
-    keep_fitting: for ``liepa-refine`` and ``liepa-fair``, keep the minimum-weight triangulation
-        as it is when it already matches the faces around the hole (:func:`_fits_its_border`).
-        The repair pipeline asks this of holes bounded by input vertices alone (the bridge chains
-        on other holes' borders still move in its global fairing: featuretype-hole, full mode,
-        Hausdorff 1.34 -> 1.76 % when every hole was asked, 1.04 % so); off by default (the F-rep
-        pipeline refines every fill and projects it onto the true surface).
     """
     _check(method, weight, fairing, fair_weights)
     v = np.asarray(vertices, dtype=np.float64)
@@ -309,8 +303,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         # another, the copies joined
         return _darn_parts(v, f, lp, pairs, apart, dict(
             method=method, weight=weight, density=density, fairing=fairing, fair_weights=fair_weights,
-            fair_rounds=fair_rounds, smooth=smooth, fair_iterations=fair_iterations, forbid_existing=forbid_existing,
-            keep_fitting=keep_fitting))
+            fair_rounds=fair_rounds, smooth=smooth, fair_iterations=fair_iterations, forbid_existing=forbid_existing))
     ring = f[np.isin(f, lp).any(axis=1)]  # the fixed faces touching the hole border
     if apart is not None and len(apart):
         ap = np.asarray(apart, dtype=np.int64).reshape(-1, 3)
@@ -338,7 +331,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         normals = _outside_normals(v, ring, lp)
     lf = triangulate(v[lp], weight=weight, forbidden=forbidden, outside_normals=normals)
     patch_faces = lp[lf]
-    if method == "liepa" or (keep_fitting and len(ring) and _fits_its_border(v, ring, patch_faces)):
+    if method == "liepa":
         return Patch(np.zeros((0, 3)), patch_faces, lp, method, weight)
     if fair_rounds < 1:
         raise ValueError(f"fair_rounds must be >= 1, got {fair_rounds}")
@@ -382,24 +375,6 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
                 pf, nflip = relax(P, pf, every)
                 flips += nflip
     return Patch(P[nv:], pf, lp, method, weight, splits, flips)
-
-
-def _fits_its_border(v: NDArray[np.float64], ring: NDArray[np.int64], faces: NDArray[np.int64]) -> bool:
-    """Whether the minimum-weight triangulation already matches the surface around the hole: no
-    edge of its faces is longer than the longest edge of the faces at the hole's border. Then it
-    is the hole's own missing faces (a row of slivers of which every other one is missing: a cut
-    across the side of a cylinder, whose side triangles are as long as the cylinder) and
-    refinement and fairing only move points off them: trimesh cylinder cut 1:1, Hausdorff 16 %
-    of the diagonal refined and faired, 0 as triangulated."""
-    def longest(f: NDArray[np.int64]) -> NDArray[np.float64]:
-        t = v[f]
-        return np.linalg.norm(t - np.roll(t, -1, axis=1), axis=2).max(axis=1)
-
-    def area(f: NDArray[np.int64]) -> NDArray[np.float64]:
-        t = v[f]
-        return np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
-
-    return bool(longest(faces).max() <= longest(ring).max() and area(faces).max() <= area(ring).max() * (1 + 1e-9))
 
 
 def _darn_parts(v: NDArray[np.float64], f: NDArray[np.int64], lp: NDArray[np.int64], pairs: NDArray[np.int64],
