@@ -44,7 +44,9 @@ Input faces are never changed; new vertices are appended after the input's.
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -53,7 +55,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..mesh import Mesh, _frozen
-from ..topology import boundary_halfedges, boundary_loops, edge_table, halfedges
+from ..topology import boundary_halfedges, boundary_loops, edge_table, halfedges, vertex_fans
 from .fair import ORDERS, WEIGHTINGS, fair, tangential_relax
 from .fan import fan
 from .liepa import WEIGHTS, triangulate
@@ -160,13 +162,9 @@ def split_pinched(loop: NDArray[np.int64], pairs: NDArray[np.int64],
     """
     to = {int(c): int(k) for c, k in np.asarray(pairs, dtype=np.int64).reshape(-1, 2)}
     rest = [to.get(int(x), int(x)) for x in loop]
-    seen: set[int] = set()
-    repeated = {x for x in rest if x in seen or seen.add(x)}
+    repeated = {x for x, k in Counter(rest).items() if k > 1}
     fans = _fan_labels(faces, repeated) if faces is not None and repeated else {}
-
-    def wrong(p: int, x: int, q: int) -> int:
-        return _wrong_passes(fans, p, x, q)
-
+    wrong = partial(_wrong_passes, fans)
     parts: list[NDArray[np.int64]] = []
     while True:
         best: tuple[int, int] | None = None
@@ -195,46 +193,32 @@ def split_pinched(loop: NDArray[np.int64], pairs: NDArray[np.int64],
     return [p for p in parts if len(p) >= 3]
 
 
-def _fan_labels(faces: NDArray[np.int64], verts: set[int]) -> dict[int, tuple[int, dict[int, int]]]:
-    """For each vertex of ``verts``: (number of fans of its faces, neighbour -> fan of the edge to
-    it, -1 where the edge has two or more faces). A fan: faces around the vertex joined by edges."""
+def _fan_labels(faces: NDArray[np.int64], verts: set[int]) -> dict[int, dict[int, int]]:
+    """For each vertex of ``verts`` with two or more fans (topology.vertex_fans): neighbour -> the
+    fan of the edge to it (-1 where the edge has two or more faces)."""
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    out: dict[int, tuple[int, dict[int, int]]] = {}
-    for x in verts:
-        star = f[(f == x).any(axis=1)]
-        if not len(star):
+    star = f[np.isin(f, list(verts)).any(axis=1)]  # every face at a vertex of ``verts``
+    out: dict[int, dict[int, int]] = {}
+    for x, fans in vertex_fans(star).items():
+        if x not in verts:
             continue
-        others = [[int(y) for y in t if y != x] for t in star]
-        parent = list(range(len(star)))
-
-        def root(k: int) -> int:
-            while parent[k] != k:
-                parent[k] = parent[parent[k]]
-                k = parent[k]
-            return k
-
-        first: dict[int, int] = {}
-        count: dict[int, int] = {}
-        for k, ys in enumerate(others):
-            for y in ys:
-                count[y] = count.get(y, 0) + 1
-                if y in first:
-                    parent[root(k)] = root(first[y])
-                else:
-                    first[y] = k
-        labels = {root(k) for k in range(len(star))}
-        out[x] = (len(labels), {y: (root(k) if count[y] == 1 else -1) for y, k in first.items()})
+        of: dict[int, int] = {}
+        for i, members in enumerate(fans):
+            for y in star[members].ravel().tolist():
+                if y != x:
+                    of[y] = -1 if y in of else i  # a second face on the edge x-y: an inner edge
+        out[x] = of
     return out
 
 
-def _wrong_passes(fans: dict[int, tuple[int, dict[int, int]]], p: int, x: int, q: int) -> int:
+def _wrong_passes(fans: dict[int, dict[int, int]], p: int, x: int, q: int) -> int:
     """1 if the walk p -> x -> q arrives and leaves along one fan of x's faces while x has other
-    fans (it turns around that fan, spec §6: the surface on the left of the walk), else 0."""
+    fans (it turns around that fan, spec §6: the surface on the left of the walk), else 0.
+    ``fans``: :func:`_fan_labels` (vertices with one fan are not in it)."""
     if x not in fans:
         return 0
-    n, of = fans[x]
-    a, b = of.get(p, -1), of.get(q, -1)
-    return int(n >= 2 and a >= 0 and a == b)
+    a, b = fans[x].get(p, -1), fans[x].get(q, -1)
+    return int(a >= 0 and a == b)
 
 
 def _check(method: str, weight: str, fairing: str, fair_weights: str) -> None:
