@@ -352,10 +352,10 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
         # components no line joined that touch at a vertex: joined there (zero-length bridges)
-        for a, b in _shared_vertex_joins(model, frames, guard, {v for k in bridges for v in (k.start, k.end)}):
-            keep(Bridge(a, b, np.zeros((0, 3)), 0.0, "island"), None)
-            notes.append(f"islands {guard.island_of[a]} and {guard.island_of[b]} joined where they touch "
-                         f"(vertex {int(model.vertex_origin[a])})")
+        for b in _shared_vertex_joins(model, frames, guard, {v for k in bridges for v in (k.start, k.end)}):
+            keep(b, None)
+            notes.append(f"islands {guard.island_of[b.start]} and {guard.island_of[b.end]} joined where they "
+                         f"touch (vertex {int(model.vertex_origin[b.start])})")
         # the others: the best straight bridge between their nearest loops
         for _ in range(n_isl):
             comps = list(guard.components().values())
@@ -836,10 +836,11 @@ class _Incidence:
 
 
 def _shared_vertex_joins(model: Icadm, frames: list, guard: TopologyGuard,
-                         taken: set[int] = frozenset()) -> list[tuple[int, int]]:
+                         taken: set[int] = frozenset()) -> list[Bridge]:
     """Zero-length island bridges between copies of one input vertex on the loops of islands not
     yet joined (a spanning forest: each joins two components), at copies no kept bridge ends at
-    (``taken``: two bridges may not share an end).
+    (``taken``: two bridges may not share an end). Each is added to ``guard`` as it is chosen
+    (the next must see the components it joined); the caller keeps them.
 
     Normalisation splits a vertex where separate fans meet, so islands that touch at a corner come
     apart there. Where no force line joined them, they are joined at that corner rather than by a
@@ -857,16 +858,16 @@ def _shared_vertex_joins(model: Icadm, frames: list, guard: TopologyGuard,
     for f in frames:
         for v in f.vertices.tolist():
             at.setdefault(int(origin[v]), []).append(int(v))
-    out: list[tuple[int, int]] = []
+    out: list[Bridge] = []
     used = set(taken)
     for _, vs in sorted(at.items()):
         for i, a in enumerate(vs):
             for b in vs[i + 1:]:
                 if a in used or b in used or guard.effect(a, b) != "connect":
                     continue
-                out.append((a, b))
+                out.append(Bridge(a, b, np.zeros((0, 3)), 0.0, "island"))
                 used.update((a, b))
-                guard.add(Bridge(a, b, np.zeros((0, 3)), 0.0, "island"))
+                guard.add(out[-1])
     return out
 
 
