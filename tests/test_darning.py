@@ -302,3 +302,27 @@ def test_refine_splits_a_flat_ear():
     assert r1.splits >= 1 and len(r1.vertices) == n + r1.splits
     topo = metrics.topology(r1.faces)
     assert topo.boundary_loops == 1 and topo.oriented and topo.euler == 1
+
+
+def test_keep_fitting_keeps_only_a_fill_that_matches_its_border():
+    """trimesh's cylinder (its side one row of triangles as long as the cylinder) without one side
+    quad: the minimum-weight fill of the hole is two slivers as large as the ones beside them,
+    and keep_fitting keeps it unrefined. A round hole in a sphere is filled by
+    faces far larger than its border's: it is refined as without keep_fitting."""
+    import trimesh
+
+    t = trimesh.creation.cylinder(radius=0.5, height=3.0, sections=16)
+    V, F = np.asarray(t.vertices, dtype=np.float64), np.asarray(t.faces, dtype=np.int64)
+    side = np.abs(t.face_normals[:, 2]) < 1e-9
+    gone = side & (V[F][:, :, 0] > 0.45).all(axis=1) & (V[F][:, :, 1] > -1e-9).all(axis=1)
+    assert gone.sum() == 2  # the side quad between 0 and 22.5 degrees
+    lp = boundary_loops(F[~gone])[0]
+    kept = darn(V, F[~gone], lp, method="liepa-fair", keep_fitting=True)
+    plain = darn(V, F[~gone], lp, method="liepa-fair")
+    assert len(kept.new_vertices) == 0 and len(kept.faces) == len(lp) - 2 == 2
+    assert len(plain.new_vertices) > 0  # without it the slivers are split
+    sph, m = _cap_case()
+    cap = boundary_loops(m.faces)[0]
+    a = darn(m.vertices, m.faces, cap, method="liepa-fair", keep_fitting=True)
+    b = darn(m.vertices, m.faces, cap, method="liepa-fair")
+    assert len(a.new_vertices) == len(b.new_vertices) > 0

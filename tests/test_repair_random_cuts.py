@@ -333,3 +333,50 @@ def test_islands_touching_at_a_corner_have_a_positive_lc():
     assert "islands 0 and 1 joined where they touch (vertex 0)" in res.tunnel_note
     assert_input_kept(model, res.mesh)
 
+
+def test_a_fill_that_matches_its_border_is_not_refined_off_the_surface():
+    """trimesh's cylinder (its side one row of triangles as long as the cylinder) cut by a ball and a
+    slab: every other side triangle is missing over a quarter of the side. The minimum-weight fill
+    of each hole is those missing triangles; refined and faired, the points put into them moved
+    16 % of the diagonal off the side (MeshLib: 0). A fill no larger than the faces around it is
+    kept as it is (darning._fits_its_border)."""
+    import trimesh
+
+    from algorithms.metrics import point_to_surface
+
+    t = trimesh.creation.cylinder(radius=0.5, height=1.5, sections=64)
+    truth = Mesh(np.asarray(t.vertices, float), np.asarray(t.faces, np.int64))
+    model = random_cut(truth, [(76, 0.1622403034464774)],
+                       ([-0.6951223578420241, -1.6962086522258644, 0.11160103453774037], 0.4848327912220826,
+                        0.045108319747877594), 0, 1)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_closed_manifold(res, genus=0)
+    assert_input_kept(model, res.mesh)
+    # no point added (the copies normalisation made are joined again)
+    assert len(res.mesh.vertices) == truth.n_vertices
+    # the new faces lie on the cylinder (the side's quads are planar: either diagonal does)
+    t = res.mesh.vertices[res.mesh.faces[res.new_faces]]
+    assert len(t) > 0
+    probes = np.vstack([t.mean(axis=1), (t + np.roll(t, -1, axis=1)).reshape(-1, 3) / 2])
+    assert point_to_surface(probes, truth.vertices, truth.faces).max() < 1e-9 * truth.bbox_diagonal()
+
+
+def test_a_region_the_global_fairing_throws_off_takes_a_fallback():
+    """featuretype 8:1 (three balls and a slab, 100 free points), light mode: the sliver fills of the
+    through-hole walls are kept unrefined (darning._fits_its_border), and next to them the
+    cotangent U3 system of one 23-vertex fill region is ill-conditioned: it threw that region 45 %
+    of the diagonal off (Hausdorff 47.5 %). Judged over every new vertex at once the result looked
+    plausible; judged per region against its own border (repair._fair_new), that region takes U2."""
+    from algorithms.metrics import point_to_surface
+
+    part = Mesh(*load_raw(data_file("featuretype.stl")))
+    model = random_cut("featuretype.stl", [(1445, 0.400451582865298), (1645, 0.34071184050226855),
+                                           (1292, 0.44232991887961065)],
+                       ([0.1411014811888608, -0.2070464371071305, -0.8124196494173108], -0.839501228403475,
+                        0.16899973910228563), 100, 8)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_input_kept(model, res.mesh, fragments=True)
+    off = point_to_surface(res.mesh.vertices, part.vertices, part.faces).max() / part.bbox_diagonal()
+    assert off < 0.05  # 0.45 judged over every new vertex at once
+    assert "U2 cotan (1 of" in res.fairing
+

@@ -237,7 +237,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
          fairing: str = "U3", fair_weights: str = "cotan", fair_rounds: int = 2, smooth: int = 5,
          fair_iterations: int = 1,
          forbid_existing: bool = True, apart: NDArray[np.int64] | None = None,
-         edges: NDArray[np.int64] | None = None, join_copies: bool = True) -> Patch:
+         edges: NDArray[np.int64] | None = None, join_copies: bool = True, keep_fitting: bool = False) -> Patch:
     """Fill the hole bounded by ``loop`` (vertex indices in the loop's positive direction).
 
     vertices (V, 3), faces (F, 3): the surface around the hole (never modified).
@@ -265,6 +265,11 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         darn, whose faces come later): existing edges too, for the same checks only.
     join_copies: whether coincident loop vertices are copies to join (module docstring, "Pinched
         loops"); False fills them as distinct corners (``_darn_parts``, a pinch no cut separates).
+    keep_fitting: for ``liepa-refine`` and ``liepa-fair``, keep the minimum-weight triangulation
+        as it is when it already matches the faces around the hole (:func:`_fits_its_border`).
+        The repair pipeline asks this of holes bounded by input vertices alone (a bridge chain on
+        a hole's border still moves in its global fairing); off by default (the F-rep pipeline
+        refines every fill and projects it onto the true surface).
     """
     _check(method, weight, fairing, fair_weights)
     v = np.asarray(vertices, dtype=np.float64)
@@ -287,7 +292,8 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         # another, the copies joined
         return _darn_parts(v, f, lp, pairs, apart, dict(
             method=method, weight=weight, density=density, fairing=fairing, fair_weights=fair_weights,
-            fair_rounds=fair_rounds, smooth=smooth, fair_iterations=fair_iterations, forbid_existing=forbid_existing))
+            fair_rounds=fair_rounds, smooth=smooth, fair_iterations=fair_iterations, forbid_existing=forbid_existing,
+            keep_fitting=keep_fitting))
     ring = f[np.isin(f, lp).any(axis=1)]  # the fixed faces touching the hole border
     if apart is not None and len(apart):
         ap = np.asarray(apart, dtype=np.int64).reshape(-1, 3)
@@ -315,7 +321,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         normals = _outside_normals(v, ring, lp)
     lf = triangulate(v[lp], weight=weight, forbidden=forbidden, outside_normals=normals)
     patch_faces = lp[lf]
-    if method == "liepa":
+    if method == "liepa" or (keep_fitting and len(ring) and _fits_its_border(v, ring, patch_faces)):
         return Patch(np.zeros((0, 3)), patch_faces, lp, method, weight)
     if fair_rounds < 1:
         raise ValueError(f"fair_rounds must be >= 1, got {fair_rounds}")
@@ -359,6 +365,33 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
                 pf, nflip = relax(P, pf, every)
                 flips += nflip
     return Patch(P[nv:], pf, lp, method, weight, splits, flips)
+
+
+def _fits_its_border(v: NDArray[np.float64], ring: NDArray[np.int64], faces: NDArray[np.int64]) -> bool:
+    """Whether the minimum-weight triangulation already matches the surface around the hole: each of
+    its faces is no longer (longest edge) and no larger (area) than the largest surrounding face at
+    one of its corners. Then it is the hole's own missing faces (a row of slivers of which every
+    other one is missing: a cut across the side of a cylinder, whose side triangles are as long as
+    the cylinder) and refinement and fairing only move points off them: trimesh cylinder cut 1:1,
+    Hausdorff 16 % of the diagonal refined and faired, 0 as triangulated. Measured per face at its
+    corners, not against the hole's largest surrounding face: a 37-face hole on a capsule's cap
+    beside its long side slivers was left flat (sweep capsule 6:0: 1.08 % against 0.55 %); and at
+    one corner, not all three: the cylinder's holes have corners whose only faces are the cap's."""
+    def longest(f: NDArray[np.int64]) -> NDArray[np.float64]:
+        t = v[f]
+        return np.linalg.norm(t - np.roll(t, -1, axis=1), axis=2).max(axis=1)
+
+    def area(f: NDArray[np.int64]) -> NDArray[np.float64]:
+        t = v[f]
+        return np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+
+    big_l, big_a = np.zeros(len(v)), np.zeros(len(v))  # the largest ring face at each vertex
+    for k in range(3):
+        np.maximum.at(big_l, ring[:, k], longest(ring))
+        np.maximum.at(big_a, ring[:, k], area(ring))
+    tol = 1 + 1e-9
+    return bool(np.all(longest(faces) <= big_l[faces].max(axis=1) * tol)
+                and np.all(area(faces) <= big_a[faces].max(axis=1) * tol))
 
 
 def _darn_parts(v: NDArray[np.float64], f: NDArray[np.int64], lp: NDArray[np.int64], pairs: NDArray[np.int64],
