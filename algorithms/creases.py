@@ -42,7 +42,10 @@ class CreaseEnds:
         edges that reach the polygon from outside it (an edge between two polygon vertices runs
         along the border). With ``V``: where the border itself goes on along the crease (the next
         border vertex within ``along`` degrees of the crease direction), the end moves along it, so
-        that no chain starts beside a border edge that already continues the crease."""
+        that no chain starts beside a border edge that already continues the crease; a straight
+        end that moved leaves along the border's last edge (a tessellated rim read as straight
+        turns on along the border: trimesh's subdivided cylinder, whose chain from two moved ends
+        kept the directions of the sides they came from and met at a corner off the rim)."""
         on = set(polygon)
         out = [(k, d, n, c) for k, v in enumerate(polygon)
                for d, w, n, c in zip(self.directions.get(int(v), ()), self.others.get(int(v), ()),
@@ -63,6 +66,11 @@ class CreaseEnds:
                 k = step[0]
             if polygon[k] != polygon[k0]:
                 self.moved.setdefault(int(polygon[k]), set()).add(int(polygon[k0]))
+                if c is None:  # it leaves where the border turned away: along the border's last edge
+                    back = [k2 for k2 in ((k + 1) % m, (k - 1) % m)
+                            if float(t @ _unit(V[polygon[k]] - V[polygon[k2]])) > lim]
+                    if back:
+                        d = _unit(V[polygon[k]] - V[polygon[back[0]]])
             moved.append((k, d, n, c))
         return moved
 
