@@ -361,8 +361,14 @@ class Surface:
 
     def __init__(self, vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> None:
         f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+        et = edge_table(f)
+        inner = np.zeros(len(vertices), dtype=bool)
+        inner[np.unique(f)] = True
+        inner[et.edges[et.counts == 1].ravel()] = False
+        self.v = np.asarray(vertices, dtype=np.float64)[inner]  # inside the surface: faces all around
         self.t = np.asarray(vertices, dtype=np.float64)[f]  # (F, 3, 3)
         self.lo, self.hi = self.t.min(axis=1), self.t.max(axis=1)
+        self._tree = None
 
     def covers(self, points: NDArray[np.float64], tol: float, margin: float = 0.02) -> NDArray[np.bool_]:
         """(K,) whether each point lies within ``tol`` of an input face and projects strictly inside
@@ -400,6 +406,27 @@ class Surface:
             dense.append(a + (b - a) * (np.arange(1, k + 1)[:, None] / k))
         x = np.vstack(dense)[1:-1]
         return bool(len(x) and self.covers(x, tol).any())
+
+
+    def touched_by(self, p0: NDArray[np.float64], pts: NDArray[np.float64], p1: NDArray[np.float64],
+                   tol: float) -> bool:
+        """Whether the chain p0 -> pts -> p1 comes within ``tol`` of an input vertex that is not on
+        a border (faces all around it: on the surface, never in a hole), other than at its two
+        ends: a chain along input edges runs on the surface without crossing a face's inside
+        (trimesh's cone without two wedges of side slivers: an arc of its base rim from one wedge
+        to the other ran along the rim still there, over a quarter of the circle). Border vertices
+        are the callers' (a box's edge rebuilt from corner to corner passes the border vertices
+        where the hole reaches the edge)."""
+        from scipy.spatial import cKDTree
+
+        poly = np.vstack([p0[None], np.asarray(pts, dtype=np.float64).reshape(-1, 3), p1[None]])
+        if self._tree is None:
+            self._tree = cKDTree(self.v)
+        mid, half = (poly[:-1] + poly[1:]) / 2, np.linalg.norm(np.diff(poly, axis=0), axis=1) / 2
+        near = {i for m, h in zip(mid, half) for i in self._tree.query_ball_point(m, h + tol)}
+        q = self.v[sorted(near)] if near else np.zeros((0, 3))
+        q = q[(np.linalg.norm(q - p0, axis=1) > tol) & (np.linalg.norm(q - p1, axis=1) > tol)]
+        return passes_near(p0, pts, p1, q, tol)
 
 
 def passes_near(p0: NDArray[np.float64], pts: NDArray[np.float64], p1: NDArray[np.float64],

@@ -972,7 +972,8 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
         q = q[(np.linalg.norm(q - path[0], axis=1) > tol) & (np.linalg.norm(q - path[-1], axis=1) > tol)]
         if passes_near(path[0], pts, end, q, tol):
             return False
-        return surface is None or not surface.crossed_by(V[poly[i]], pts, end, 0.02 * spacing, spacing / 4)
+        return surface is None or not (surface.crossed_by(V[poly[i]], pts, end, 0.02 * spacing, spacing / 4)
+                                       or surface.touched_by(V[poly[i]], pts, end, tol))
 
     def chain(i: int, j: int, pts: NDArray[np.float64], q: float, p: tuple[int, ...]):
         N = work.N()

@@ -226,3 +226,16 @@ def test_convex_rim_versus_pocket():
     assert _convex(p, np.stack([top, radial]), c)  # a cylinder's top edge: wall outward
     assert not _convex(p, np.stack([top, -radial]), c)  # a pocket's rim: wall towards the axis
     assert _convex(p, np.stack([radial, -top]), c)  # the bottom edge, normals in the other order
+
+
+def test_surface_touched_by_a_chain_through_an_input_vertex():
+    from algorithms.creases import Surface
+
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 1, 0], [1, -1, 0]])
+    F = np.array([[0, 1, 3], [1, 2, 3], [0, 4, 1], [1, 4, 2]])
+    s = Surface(V, F)
+    p0, p1 = np.array([0.0, 0, 0]), np.array([2.0, 0, 0])
+    assert s.touched_by(p0, np.array([[0.5, 0, 0], [1.5, 0, 0]]), p1, 1e-3)  # along the edges, through vertex 1
+    assert not s.touched_by(p0, np.array([[1.0, 0.0, 0.5]]), p1, 1e-3)  # over the vertex, 0.5 above it
+    assert not s.touched_by(V[0], np.zeros((0, 3)), V[3], 1e-3)  # its own ends do not count
+    assert not s.crossed_by(p0, np.array([[0.5, 0, 0], [1.5, 0, 0]]), p1, 1e-3, 0.1)  # on edges: no face's inside

@@ -400,3 +400,27 @@ def test_a_subdivided_rim_is_continued_along_the_rim():
     off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
     assert off < 0.003  # 0.023 before
 
+
+def test_a_crease_chain_never_runs_along_input_edges():
+    """trimesh's cone (48 side triangles from the apex to the rim, the base a fan) cut by a ball
+    at the rim and a slab through the apex: two wedges of side slivers and the base fan slivers
+    between them are missing, one hole. The rim's crease ends at the two wedges lie on one
+    circle, and the arc from one to the other ran along the rim that is still there, over a quarter
+    of the circle, through its vertices: 17 % of the diagonal off (full mode), the surface folded
+    over itself. A chain that passes through an input vertex other than its ends is refused
+    (creases.Surface.touched_by); the holes are filled by their missing slivers, exactly."""
+    import trimesh
+
+    from algorithms.metrics import point_to_surface
+
+    t = trimesh.creation.cone(radius=0.5, height=1.0, sections=48)
+    truth = Mesh(np.asarray(t.vertices, float), np.asarray(t.faces, np.int64))
+    model = random_cut(truth, [(1, 0.0666335352869351)],
+                       ([-0.8497548433492589, -0.4651311064726986, -0.5908172997546445], -0.3744474032291545,
+                        0.043919181579933304), 100, 3)
+    for mode in ("light", "full"):
+        res = repair(model, RepairParams(field=FieldParams(mode=mode)))
+        assert_closed_manifold(res, genus=0)
+        assert_input_kept(model, res.mesh)
+        off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
+        assert off < 1e-3
