@@ -407,7 +407,6 @@ class Surface:
         x = np.vstack(dense)[1:-1]
         return bool(len(x) and self.covers(x, tol).any())
 
-
     def touched_by(self, p0: NDArray[np.float64], pts: NDArray[np.float64], p1: NDArray[np.float64],
                    tol: float) -> bool:
         """Whether the chain p0 -> pts -> p1 comes within ``tol`` of an input vertex that is not on

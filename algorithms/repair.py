@@ -1143,7 +1143,7 @@ def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operat
             used.append(f"{op} {w}" + (f" ({int(take.sum())} of {n_regions} regions)" if part else ""))
         left &= ~near_hole
     if not used:
-        return V, "none (every fairing system was singular)"
+        return V, "none (every fairing system was singular or threw its regions off)"
     return out, ", ".join(used) + (f", {int(left.sum())} regions unfaired" if left.any() else "")
 
 
