@@ -947,6 +947,9 @@ def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]
     return int(A[i]), int(B[j]), q
 
 
+FLAT_HOLE = 1e-3  # a hole border within this fraction of its diameter of one plane is flat (_continue_creases)
+
+
 def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spacing: float,
                       surface: Surface | None = None, origin: NDArray[np.int64] | None = None
                       ) -> tuple[list[Bridge], list[tuple[int, ...]], list[NDArray[np.int64]]] | None:
@@ -954,11 +957,22 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     three creases meet (two chains through the corner point), else the best pair of crease ends.
     Returns (bridges, the resulting hole polygons, each bridge's chain vertex ids), or None.
     Each crease end is used once (it is removed from ``ends``). ``surface``: the input faces; a
-    chain that runs over one of them (within 2 % of the spacing, creases.Surface) is refused."""
+    chain that runs over one of them (within 2 % of the spacing, creases.Surface) is refused.
+    **(choice)** A hole whose border lies in one plane (within ``FLAT_HOLE`` of its diameter) is
+    filled in that plane: a chain that leaves the plane by more than twice that is refused (an
+    octagonal prism without one side: the rim's two rays met at a corner outside the prism and the
+    side came back as a box corner, 11 % of the diagonal off)."""
     V = work.V()
+    border = V[list(poly)]
+    centre = border.mean(axis=0)
+    normal = np.linalg.svd(border - centre)[2][2]
+    width = float(np.linalg.norm(np.ptp(border, axis=0)))
+    flat = float(np.abs((border - centre) @ normal).max()) <= FLAT_HOLE * width
 
     def valid(i: int, j: int, pts: NDArray[np.float64]) -> bool:
         end = V[poly[j]] if j >= 0 else pts[-1]
+        if flat and len(pts) and float(np.abs((np.asarray(pts) - centre) @ normal).max()) > 2 * FLAT_HOLE * width:
+            return False
         # A chain never passes through another vertex of the hole's border (within 2 % of the
         # spacing, or of its length if shorter). Random fandisk cut 1:1: a crease along an input
         # edge that two border faces share (a one-face tip) ran on through the tip's vertex to the
