@@ -52,6 +52,16 @@ def trimesh_model(kind: str) -> Mesh:
             m = m.subdivide()
     elif kind == "icosphere":
         m = trimesh.creation.icosphere(4)
+    elif kind == "uv-sphere":  # poles where 32 slivers meet
+        m = trimesh.creation.uv_sphere(radius=0.7, count=[32, 32])
+    elif kind == "cone":  # 48 slivers from the apex to a sharp rim, the base a fan
+        m = trimesh.creation.cone(radius=0.5, height=1.0, sections=48)
+    elif kind == "box-coarse":  # the box subdivided once: big faces, a cut takes whole ones
+        m = trimesh.creation.box((1.0, 0.7, 0.4)).subdivide()
+    elif kind == "prism-8":  # an octagonal prism: a side is two triangles, its edges 45 degrees sharp
+        m = trimesh.creation.cylinder(radius=0.5, height=1.0, sections=8)
+    elif kind == "torus-thick":  # a fat tube (radii 1 and 0.6): the hole through it is small
+        m = trimesh.creation.torus(1.0, 0.6, major_sections=48, minor_sections=32)
     else:
         raise ValueError(f"unknown trimesh model {kind!r}")
     return Mesh(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64))
@@ -89,6 +99,11 @@ MODELS = {
     "cylinder-sub": (lambda: trimesh_model("cylinder-sub"), 0),
     "box": (lambda: trimesh_model("box"), 0),
     "icosphere": (lambda: trimesh_model("icosphere"), 0),
+    "uv-sphere": (lambda: trimesh_model("uv-sphere"), 0),
+    "cone": (lambda: trimesh_model("cone"), 0),
+    "box-coarse": (lambda: trimesh_model("box-coarse"), 0),
+    "prism-8": (lambda: trimesh_model("prism-8"), 0),
+    "torus-thick": (lambda: trimesh_model("torus-thick"), 1),
     "fandisk": (lambda: load("fandisk.obj"), 0),
     "featuretype": (lambda: load("featuretype.stl"), 9),
     "torus": (lambda: load("torus.stl"), 1),
