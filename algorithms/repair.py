@@ -46,7 +46,7 @@ from .creases import (
     passes_near,
 )
 from .fragments import Attached, attach_fragments, fragment_bridge
-from .holes import HoleVerdict, SimpleHoleTest, classify_hole, polygon_frame
+from .holes import HoleVerdict, SimpleHoleTest, best_fit_plane, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
 from .metrics import angle_stats, min_angles, topology
 from .params import FieldParams
@@ -964,8 +964,7 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     side came back as a box corner, 11 % of the diagonal off)."""
     V = work.V()
     border = V[list(poly)]
-    centre = border.mean(axis=0)
-    normal = np.linalg.svd(border - centre)[2][2]
+    centre, normal = best_fit_plane(border)
     width = float(np.linalg.norm(np.ptp(border, axis=0)))
     flat = float(np.abs((border - centre) @ normal).max()) <= FLAT_HOLE * width
 
