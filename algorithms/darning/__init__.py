@@ -377,21 +377,17 @@ def _fits_its_border(v: NDArray[np.float64], ring: NDArray[np.int64], faces: NDA
     corners, not against the hole's largest surrounding face: a 37-face hole on a capsule's cap
     beside its long side slivers was left flat (sweep capsule 6:0: 1.08 % against 0.55 %); and at
     one corner, not all three: the cylinder's holes have corners whose only faces are the cap's."""
-    def longest(f: NDArray[np.int64]) -> NDArray[np.float64]:
-        t = v[f]
-        return np.linalg.norm(t - np.roll(t, -1, axis=1), axis=2).max(axis=1)
-
-    def area(f: NDArray[np.int64]) -> NDArray[np.float64]:
-        t = v[f]
-        return np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
-
+    t = v[np.vstack([ring, faces])]
+    longest = np.linalg.norm(t - np.roll(t, -1, axis=1), axis=2).max(axis=1)
+    area = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)  # twice the area: compared only
+    n = len(ring)
     big_l, big_a = np.zeros(len(v)), np.zeros(len(v))  # the largest ring face at each vertex
     for k in range(3):
-        np.maximum.at(big_l, ring[:, k], longest(ring))
-        np.maximum.at(big_a, ring[:, k], area(ring))
+        np.maximum.at(big_l, ring[:, k], longest[:n])
+        np.maximum.at(big_a, ring[:, k], area[:n])
     tol = 1 + 1e-9
-    return bool(np.all(longest(faces) <= big_l[faces].max(axis=1) * tol)
-                and np.all(area(faces) <= big_a[faces].max(axis=1) * tol))
+    return bool(np.all(longest[n:] <= big_l[faces].max(axis=1) * tol)
+                and np.all(area[n:] <= big_a[faces].max(axis=1) * tol))
 
 
 def _darn_parts(v: NDArray[np.float64], f: NDArray[np.int64], lp: NDArray[np.int64], pairs: NDArray[np.int64],
