@@ -1106,13 +1106,13 @@ def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operat
 
     **(choice)** Plausibility is judged per free region (``fair.free_regions``: one hole's fill, or
     fills joined by free bridge chains) against the region's own border, its vertices and the fixed
-    vertices of the faces touching them (``darning.plausible``): a region the system throws off
+    vertices of the faces touching them (``darning.plausible_regions``): a region the system throws off
     keeps the first fallback that leaves it near its hole, the other regions keep the first
     system. Judged over all the new vertices together, a 23-vertex region thrown 45 % of the
     diagonal passed, because the box of every new vertex was as large (featuretype cut 8:1 with
     the sliver fills of a cylinder-like wall left unrefined, where cotangent weights are
     ill-conditioned)."""
-    from .darning import plausible
+    from .darning import plausible_regions
     from .darning.fair import ORDERS, fair, free_regions
 
     free = np.setdiff1d(np.arange(n_input, len(V)), keep_still if keep_still is not None else [])
@@ -1146,9 +1146,7 @@ def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operat
             got = fair(out, F, todo, operator=op, weights=w)
         except (RuntimeError, ValueError, np.linalg.LinAlgError):
             continue
-        near_hole = np.ones(n_regions, dtype=bool)
-        for r in np.flatnonzero(left):
-            near_hole[r] = plausible(got[free[label == r]], np.stack([lo[r], hi[r]]))
+        near_hole = plausible_regions(got[free], label, lo, hi)
         take = left & near_hole
         if take.any():
             out[free[take[label]]] = got[free[take[label]]]

@@ -469,11 +469,23 @@ def plausible(points: NDArray[np.float64], border: NDArray[np.float64], *, reach
     its width; a near-singular system throws vertices far away)."""
     if not len(points):
         return True
-    if not np.all(np.isfinite(points)):
-        return False
-    lo, hi = border.min(axis=0), border.max(axis=0)
-    pad = reach * float(np.linalg.norm(hi - lo))
-    return bool(np.all(points >= lo - pad) and np.all(points <= hi + pad))
+    b = np.asarray(border, dtype=np.float64)
+    return bool(plausible_regions(np.asarray(points, dtype=np.float64), np.zeros(len(points), dtype=np.int64),
+                                  b.min(axis=0)[None], b.max(axis=0)[None], reach=reach)[0])
+
+
+def plausible_regions(points: NDArray[np.float64], label: NDArray[np.int64], lo: NDArray[np.float64],
+                      hi: NDArray[np.float64], *, reach: float = 1.0) -> NDArray[np.bool_]:
+    """(R,) :func:`plausible` for points in regions ``label`` (0..R-1), each region against its own
+    border box ``lo[r]``..``hi[r]`` (R, 3), in one pass. A region without a border (an empty box,
+    lo > hi: new vertices no face uses) has nothing to stray from: only finiteness counts there."""
+    empty = np.any(lo > hi, axis=1)[:, None]
+    pad = np.where(empty, 0.0, reach * np.linalg.norm(np.where(empty, 0.0, hi - lo), axis=1)[:, None])
+    lo, hi = np.where(empty, -np.inf, lo - pad), np.where(empty, np.inf, hi + pad)
+    ok = np.isfinite(points).all(axis=1) & np.all(points >= lo[label], axis=1) & np.all(points <= hi[label], axis=1)
+    out = np.ones(len(lo), dtype=bool)
+    np.logical_and.at(out, label, ok)
+    return out
 
 
 def _outside_normals(v: NDArray[np.float64], ring: NDArray[np.int64], lp: NDArray[np.int64]) -> NDArray[np.float64]:
