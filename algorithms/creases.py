@@ -56,21 +56,18 @@ class CreaseEnds:
         m, lim = len(polygon), np.cos(np.radians(along))
         moved = []
         for k, d, n, c in out:
-            k0 = k
+            k0 = prev = k
             t = tangent(V[polygon[k]], d, c)  # a curved crease leaves along its circle's tangent
             for _ in range(m):  # sequential: walk while the border follows the crease
                 step = [k2 for k2 in ((k + 1) % m, (k - 1) % m)
                         if float(t @ _unit(V[polygon[k2]] - V[polygon[k]])) > lim]
                 if not step:
                     break
-                k = step[0]
+                prev, k = k, step[0]
             if polygon[k] != polygon[k0]:
                 self.moved.setdefault(int(polygon[k]), set()).add(int(polygon[k0]))
                 if c is None:  # it leaves where the border turned away: along the border's last edge
-                    back = [k2 for k2 in ((k + 1) % m, (k - 1) % m)
-                            if float(t @ _unit(V[polygon[k]] - V[polygon[k2]])) > lim]
-                    if back:
-                        d = _unit(V[polygon[k]] - V[polygon[back[0]]])
+                    d = _unit(V[polygon[k]] - V[polygon[prev]])
             moved.append((k, d, n, c))
         return moved
 
@@ -422,8 +419,9 @@ class Surface:
         if self._tree is None:
             self._tree = cKDTree(self.v)
         mid, half = (poly[:-1] + poly[1:]) / 2, np.linalg.norm(np.diff(poly, axis=0), axis=1) / 2
-        near = {i for m, h in zip(mid, half) for i in self._tree.query_ball_point(m, h + tol)}
-        q = self.v[sorted(near)] if near else np.zeros((0, 3))
+        near = np.unique(np.concatenate([np.asarray(i, dtype=np.int64)
+                                         for i in self._tree.query_ball_point(mid, half + tol)]))
+        q = self.v[near]
         q = q[(np.linalg.norm(q - p0, axis=1) > tol) & (np.linalg.norm(q - p1, axis=1) > tol)]
         return passes_near(p0, pts, p1, q, tol)
 
