@@ -31,39 +31,45 @@ from bench.cases import DATA, BenchCase, ball, load, slab
 from bench.repair import meshlib_fill, ours_repair, run_isolated, score
 
 
+def _subdivided(m, times: int):
+    for _ in range(times):
+        m = m.subdivide()
+    return m
+
+
+# trimesh's own primitives, slivers and all: name -> (builder of trimesh's module, genus)
+TRIMESH = {
+    "capsule": (lambda t: t.creation.capsule(height=2.0, radius=0.6, count=[48, 48]), 0),
+    # a thick washer: genus 1 with four sharp circular creases
+    "annulus": (lambda t: _subdivided(t.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96), 2), 1),
+    # side triangles as long as the cylinder, caps fans of slivers
+    "cylinder": (lambda t: t.creation.cylinder(radius=0.5, height=1.5, sections=64), 0),
+    # the same, subdivided twice: its rims polygons with straight runs
+    "cylinder-sub": (lambda t: _subdivided(t.creation.cylinder(radius=0.5, height=1.5, sections=48), 2), 0),
+    # flat faces and sharp right-angled edges, subdivided four times
+    "box": (lambda t: _subdivided(t.creation.box((1.0, 0.7, 0.4)), 4), 0),
+    "icosphere": (lambda t: t.creation.icosphere(4), 0),
+    "uv-sphere": (lambda t: t.creation.uv_sphere(radius=0.7, count=[32, 32]), 0),  # poles where 32 slivers meet
+    # 48 slivers from the apex to a sharp rim, the base a fan
+    "cone": (lambda t: t.creation.cone(radius=0.5, height=1.0, sections=48), 0),
+    # the box subdivided once: big faces, a cut takes whole ones
+    "box-coarse": (lambda t: _subdivided(t.creation.box((1.0, 0.7, 0.4)), 1), 0),
+    # an octagonal prism: a side is two triangles, its edges 45 degrees sharp
+    "prism-8": (lambda t: t.creation.cylinder(radius=0.5, height=1.0, sections=8), 0),
+    # a fat tube (radii 1 and 0.6): the hole through it is small
+    "torus-thick": (lambda t: t.creation.torus(1.0, 0.6, major_sections=48, minor_sections=32), 1),
+}
+
+
 def trimesh_model(kind: str) -> Mesh:
-    """trimesh's own primitives, slivers and all (a capsule's side is one row of triangles as long
-    as the capsule; the annulus' flat rings are fans of thin triangles): holes whose borders mix
-    short and long edges."""
+    """One of trimesh's primitives (``TRIMESH``), slivers and all (a capsule's side is one row of
+    triangles as long as the capsule; the annulus' flat rings are fans of thin triangles): holes
+    whose borders mix short and long edges."""
     import trimesh
 
-    if kind == "capsule":
-        m = trimesh.creation.capsule(height=2.0, radius=0.6, count=[48, 48])
-    elif kind == "annulus":  # a thick washer: genus 1 with four sharp circular creases
-        m = trimesh.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96)
-        m = m.subdivide().subdivide()
-    elif kind == "cylinder":  # side triangles as long as the cylinder, caps fans of slivers
-        m = trimesh.creation.cylinder(radius=0.5, height=1.5, sections=64)
-    elif kind == "cylinder-sub":  # the same, subdivided twice: its rims polygons with straight runs
-        m = trimesh.creation.cylinder(radius=0.5, height=1.5, sections=48).subdivide().subdivide()
-    elif kind == "box":  # flat faces and sharp right-angled edges, subdivided four times
-        m = trimesh.creation.box((1.0, 0.7, 0.4))
-        for _ in range(4):
-            m = m.subdivide()
-    elif kind == "icosphere":
-        m = trimesh.creation.icosphere(4)
-    elif kind == "uv-sphere":  # poles where 32 slivers meet
-        m = trimesh.creation.uv_sphere(radius=0.7, count=[32, 32])
-    elif kind == "cone":  # 48 slivers from the apex to a sharp rim, the base a fan
-        m = trimesh.creation.cone(radius=0.5, height=1.0, sections=48)
-    elif kind == "box-coarse":  # the box subdivided once: big faces, a cut takes whole ones
-        m = trimesh.creation.box((1.0, 0.7, 0.4)).subdivide()
-    elif kind == "prism-8":  # an octagonal prism: a side is two triangles, its edges 45 degrees sharp
-        m = trimesh.creation.cylinder(radius=0.5, height=1.0, sections=8)
-    elif kind == "torus-thick":  # a fat tube (radii 1 and 0.6): the hole through it is small
-        m = trimesh.creation.torus(1.0, 0.6, major_sections=48, minor_sections=32)
-    else:
+    if kind not in TRIMESH:
         raise ValueError(f"unknown trimesh model {kind!r}")
+    m = TRIMESH[kind][0](trimesh)
     return Mesh(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64))
 
 
@@ -93,17 +99,7 @@ MODELS = {
     "thin-torus": (lambda: gen.torus(1.0, 0.22, 96, 24), 1),
     "peanut": (_peanut, 0),
     "flat-torus": (_flat_torus, 1),
-    "capsule": (lambda: trimesh_model("capsule"), 0),
-    "annulus": (lambda: trimesh_model("annulus"), 1),
-    "cylinder": (lambda: trimesh_model("cylinder"), 0),
-    "cylinder-sub": (lambda: trimesh_model("cylinder-sub"), 0),
-    "box": (lambda: trimesh_model("box"), 0),
-    "icosphere": (lambda: trimesh_model("icosphere"), 0),
-    "uv-sphere": (lambda: trimesh_model("uv-sphere"), 0),
-    "cone": (lambda: trimesh_model("cone"), 0),
-    "box-coarse": (lambda: trimesh_model("box-coarse"), 0),
-    "prism-8": (lambda: trimesh_model("prism-8"), 0),
-    "torus-thick": (lambda: trimesh_model("torus-thick"), 1),
+    **{name: (functools.partial(trimesh_model, name), genus) for name, (_, genus) in TRIMESH.items()},
     "fandisk": (lambda: load("fandisk.obj"), 0),
     "featuretype": (lambda: load("featuretype.stl"), 9),
     "torus": (lambda: load("torus.stl"), 1),
