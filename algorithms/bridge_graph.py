@@ -94,15 +94,31 @@ class BoundaryEdges:
     so their edges are tested. (Testing the edges at its ends too refused a tunnel bridge of
     featuretype cut by balls from a vertex to a copy of its neighbour: it lies on their border
     edge, yet without it a handle was lost.)
+
+    ``fragments``: the faces of each fragment normalisation set aside. The repair walks them back
+    into the holes after the bridges, so no bridge may cross their edges either (torus cut into two
+    islands and a three-face fragment between them: a bridge along the other diagonal of the
+    fragment's quad was walked twice, and the darning closed a pillow), except a bridge between two
+    vertices of one fragment: it joins what the fragment joins (featuretype cut by a slab, a
+    two-face fragment across the gap between two islands, tests/test_repair_cad_cuts.py).
     """
 
     def __init__(self, vertices: NDArray[np.float64], loops: list[NDArray[np.int64]],
-                 faces: NDArray[np.int64] | None = None) -> None:
+                 faces: NDArray[np.int64] | None = None,
+                 fragments: list[NDArray[np.int64]] | None = None) -> None:
         # faces: the surface's faces, for ``is_edge``
         self._face_edges: set[tuple[int, int]] = set()
         if faces is not None and len(faces):
             self._face_edges = set(map(tuple, edge_table(np.asarray(faces, dtype=np.int64)).edges.tolist()))
         e = [np.stack([lp, np.roll(lp, -1)], axis=1) for lp in loops if len(lp) >= 2]
+        # the fragment each edge belongs to (-1: a loop edge), and each fragment's vertices
+        group = [np.full(len(x), -1) for x in e]
+        self._fragment_vertices = [set(np.unique(f).tolist()) for f in fragments or ()]
+        for k, f in enumerate(fragments or ()):
+            fe = edge_table(np.asarray(f, dtype=np.int64)).edges
+            e.append(fe)
+            group.append(np.full(len(fe), k))
+        self.group = np.concatenate(group) if group else np.zeros(0, dtype=np.int64)
         self.edges = np.concatenate(e).astype(np.int64) if e else np.zeros((0, 2), dtype=np.int64)
         p = np.asarray(vertices, dtype=np.float64)
         self.a, self.b = p[self.edges[:, 0]], p[self.edges[:, 1]]
@@ -125,7 +141,7 @@ class BoundaryEdges:
     def distance(self, p0: NDArray[np.float64], p1: NDArray[np.float64], skip: set[int],
                  radius: float) -> NDArray[np.float64]:
         """(K,) each segment p0[k] -> p1[k]'s distance to the nearest boundary edge not at a vertex
-        of ``skip`` (inf beyond ``radius``)."""
+        of ``skip``, nor of a fragment that holds all of ``skip`` (inf beyond ``radius``)."""
         out = np.full(len(p0), np.inf)
         if self.tree is None or not len(p0):
             return out
@@ -136,6 +152,9 @@ class BoundaryEdges:
             return out
         e = np.concatenate([np.asarray(x, dtype=np.int64) for x in near])
         keep = ~np.isin(self.edges[e], list(skip)).any(axis=1)
+        own = [k for k, vs in enumerate(self._fragment_vertices) if skip <= vs]
+        if own:
+            keep &= ~np.isin(self.group[e], own)
         seg, e = seg[keep], e[keep]
         # every (segment, nearby edge) pair at once; the nearest per segment
         np.minimum.at(out, seg, segment_distance(p0[seg], p1[seg], self.a[e], self.b[e]))

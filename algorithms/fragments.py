@@ -58,6 +58,11 @@ def _fragments(model: Icadm) -> list[tuple[list[int], NDArray[np.int64]]]:
     return [([ids[k] for k in np.flatnonzero(lab == i)], faces[lab == i]) for i in range(n)]
 
 
+def fragment_faces(model: Icadm) -> list[NDArray[np.int64]]:
+    """The faces of each fragment normalisation set aside, over the model's vertices."""
+    return [f for _, f in _fragments(model)]
+
+
 def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDArray[np.float64],
                      vertices: NDArray[np.float64] | None = None) -> Attached:
     """Walk every set-aside fragment that hangs at vertices of the hole polygons into them.

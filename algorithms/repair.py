@@ -45,7 +45,7 @@ from .creases import (
     hermite,
     passes_near,
 )
-from .fragments import Attached, attach_fragments, fragment_bridge
+from .fragments import Attached, attach_fragments, fragment_bridge, fragment_faces
 from .holes import HoleVerdict, SimpleHoleTest, best_fit_plane, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh
 from .metrics import angle_stats, min_angles, topology
@@ -273,7 +273,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     lc_for_rules = spacing * 10
     rules = ConflictRules(clearance=params.clearance_factor * spacing,
                           neighbourhood=params.neighbourhood_factor * lc_for_rules, endpoint_gap=2)
-    boundary = BoundaryEdges(mesh.vertices, loops, mesh.faces)
+    boundary = BoundaryEdges(mesh.vertices, loops, mesh.faces, fragments=fragment_faces(model))
     state = GraphState(work.V(), loop_of, [len(lp) for lp in loops], rules, boundary=boundary)
     guard = TopologyGuard(loops, [f.island for f in frames])
     notes: list[str] = []

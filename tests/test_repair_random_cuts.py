@@ -444,3 +444,23 @@ def test_a_flat_hole_is_filled_in_its_plane():
     assert len(res.mesh.vertices) == truth.n_vertices and len(res.new_faces) == 2
     off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
     assert off < 1e-9
+
+
+@pytest.mark.parametrize("mode", ["light", "full"])
+def test_no_bridge_crosses_a_fragment_set_aside(mode):
+    """trimesh's thick torus (radii 1 and 0.6) cut by four balls and a slab into two islands, with
+    a three-face fragment spanning between them (it touches island 0 at two vertices and island 1
+    at one, so normalisation sets it aside). A force-line bridge ran along the other diagonal of
+    the fragment's quad, across its edge; walked back in after the bridges, the fragment made a
+    hole whose walk used that bridge twice, and the darning closed a two-face pillow: an edge with
+    four faces. The fragments' edges are now edges no bridge may cross (BoundaryEdges extra)."""
+    model = random_cut(trimesh_model("torus-thick"),
+                       [(1120, 0.17644831910826778), (268, 0.31238328217427974), (398, 0.3792350789655762),
+                        (382, 0.3403862436192659)],
+                       ([1.0437300331143755, -1.2837910748366412, -0.7748155161722277], -0.5458213019271432,
+                        0.09931840840928213), 0, 2)
+    assert any(s.reason.startswith("fragment") for s in model.set_aside)
+    res = repair(model, RepairParams(field=FieldParams(mode=mode)))
+    assert_closed_manifold(res, genus=1)
+    assert_input_kept(model, res.mesh)
+
