@@ -280,16 +280,40 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     pending: list[tuple[int, Bridge, ForceLine, str]] = []
     n_arrived = 0
 
+    # the loop vertices that are copies of one input vertex (normalisation split it where islands
+    # or fans touch), by input vertex
+    origin = model.vertex_origin if model.vertex_origin is not None else np.arange(mesh.n_vertices)
+    copies: dict[int, list[int]] = {}
+    for v in loop_of:
+        copies.setdefault(int(origin[v]), []).append(v)
+
+    def along_edge_to_copy(a: int, b: int) -> int | None:
+        """A copy of ``b`` next to ``a`` on a's loop, or None. A line from a to b then ends where the
+        border edge from a ends: it joins the islands at that copy (torus cut into two islands that
+        touch at two vertices: a bridge along the border edge up to a copy closed a two-face pillow)."""
+        k, i = loop_of[a]
+        lp = loops[k]
+        near = {int(lp[i - 1]), int(lp[(i + 1) % len(lp)])}
+        return next((c for c in copies.get(int(origin[b]), ()) if c != b and c in near), None)
+
     def as_bridges(cands: list[ForceLine], kind: str) -> list[tuple[Bridge, ForceLine]]:
-        """Arrived lines as bridges (chains resampled at the spacing), best quality first."""
+        """Arrived lines as bridges (chains resampled at the spacing), best quality first. A line
+        from a vertex to a copy of its neighbour on the border is the zero-length join of the two
+        copies (``along_edge_to_copy``)."""
         out = []
         line_index = {id(ln): k for k, ln in enumerate(lines)}
         for ln in sorted(cands, key=lambda x: -x.quality):
             if not ln.arrived or ln.start_vertex not in loop_of or ln.end_vertex not in loop_of:
                 continue
-            poly = np.vstack([mesh.vertices[ln.start_vertex], ln.points[1:-1], mesh.vertices[ln.end_vertex]])
-            out.append((Bridge(int(ln.start_vertex), int(ln.end_vertex), resample_chain(poly, spacing),
-                               float(ln.quality), kind, line_index.get(id(ln), -1)), ln))
+            a, b = int(ln.start_vertex), int(ln.end_vertex)
+            c = along_edge_to_copy(a, b)
+            if c is not None:
+                a, pts = c, np.zeros((0, 3))
+            elif (c := along_edge_to_copy(b, a)) is not None:
+                b, pts = c, np.zeros((0, 3))
+            else:
+                pts = resample_chain(np.vstack([mesh.vertices[a], ln.points[1:-1], mesh.vertices[b]]), spacing)
+            out.append((Bridge(a, b, pts, float(ln.quality), kind, line_index.get(id(ln), -1)), ln))
         return out
 
     def keep(b: Bridge, ln: ForceLine | None) -> None:

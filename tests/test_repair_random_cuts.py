@@ -464,3 +464,21 @@ def test_no_bridge_crosses_a_fragment_set_aside(mode):
     assert_closed_manifold(res, genus=1)
     assert_input_kept(model, res.mesh)
 
+
+def test_a_line_along_the_border_to_a_copy_is_a_join_at_the_copy():
+    """trimesh annulus cut 8:0 (three balls and a slab), light mode: islands that touch at a vertex
+    (normalisation split it into copies). A force line from the copy's neighbour on one island to
+    the other copy ran along their border edge; kept as a bridge, the walk passed it twice and the
+    darning gave the edge four faces (two components, not closed). Such a line is the zero-length
+    join of the two copies."""
+    model = annulus_cut([(3383, 0.16148950698166836), (3231, 0.29896377404748703), (3335, 0.17248119952910568)],
+                        ([2.275736678219298, 0.35228993759465843, -0.5705975789885896], 0.5387299271681296,
+                         0.06576190384871203), 0, 8)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_closed_manifold(res)
+    assert_input_kept(model, res.mesh)
+    # the joins the lines made: bare bridges between copies of one input vertex
+    origin = model.vertex_origin
+    joins = [b for b in res.bridges if b.kind == "island" and not len(b.points) and b.start != b.end
+             and origin[b.start] == origin[b.end]]
+    assert joins
