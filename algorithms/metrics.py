@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .topology import boundary_loops, edge_table, euler_characteristic, islands, orientation_consistent
+from .topology import boundary_loops, edge_table, euler_characteristic, islands, orientation_consistent, vertex_fans
 
 
 def triangle_angles(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
@@ -100,6 +100,7 @@ class TopologySummary:
     boundary_loops: int
     euler: int
     genus: float  # of the whole surface, from chi = 2c - 2g - b
+    manifold_vertices: bool = True  # every vertex has one fan of faces (no pinch)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -115,7 +116,7 @@ def topology(faces: NDArray[np.int64]) -> TopologySummary:
     oriented = orientation_consistent(faces)
     closed = bool(len(faces)) and bool(np.all(et.counts == 2))
     return TopologySummary(closed and oriented, manifold, oriented, comps, len(loops), chi,
-                           (2 * comps - chi - len(loops)) / 2)
+                           (2 * comps - chi - len(loops)) / 2, not len(vertex_fans(faces)))
 
 
 def edge_lengths(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:

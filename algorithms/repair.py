@@ -189,6 +189,7 @@ class RepairResult:
             "patch_angles": ang.as_dict() if ang else None,
             "output": {"watertight": topo.watertight, "components": topo.components, "euler": topo.euler,
                        "genus": topo.genus, "boundary_loops": topo.boundary_loops,
+                       "manifold_vertices": topo.manifold_vertices,
                        "faces": self.mesh.n_faces, "vertices": self.mesh.n_vertices},
             "lc": self.lc,
             "fairing": self.fairing,

@@ -248,53 +248,36 @@ def nonmanifold_vertices(faces: NDArray[np.int64]) -> NDArray[np.int64]:
 def vertex_fans(faces: NDArray[np.int64]) -> dict[int, list[list[int]]]:
     """For every vertex with more than one fan: its fans, as lists of incident face indices.
 
-    Two faces at v are in one fan when they share an edge that has v as an endpoint.
-    Vertices with a single fan are not listed (the common case, kept cheap).
+    Two faces at v are in one fan when they share an edge that has v as an endpoint. The corners
+    (face, k) of each vertex are joined across such edges and counted by connected component, so
+    two closed fans that touch at a vertex (a pinch of a closed surface) count as two. Vertices
+    with a single fan are not listed.
     """
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
     faces = np.asarray(faces, dtype=np.int64)
     nf = len(faces)
     if not nf:
         return {}
-    nv = int(faces.max()) + 1
-    # count, per vertex, faces minus (edge-adjacent face pairs around it): a single fan of k faces
-    # has k-1 links (open) or k links (closed); more fans have fewer links.
     pairs = face_adjacency(faces, manifold_only=False)
-    inc = np.bincount(faces.ravel(), minlength=nv)
-    # vertices shared by each adjacent pair: the two endpoints of their common edge
-    a, b = faces[pairs[:, 0]], faces[pairs[:, 1]]
-    shared = (a[:, :, None] == b[:, None, :]).any(axis=2)
-    links = np.zeros(nv, dtype=np.int64)
-    np.add.at(links, a[shared], 1)
-    suspect = np.flatnonzero((inc > 0) & (links < inc - 1))
-    out: dict[int, list[list[int]]] = {}
-    if not len(suspect):
-        return out
-    vf: dict[int, list[int]] = {int(v): [] for v in suspect}
-    for f, tri in enumerate(faces.tolist()):
-        for v in tri:
-            if v in vf:
-                vf[v].append(f)
-    for v, fl in vf.items():
-        # union-find over faces at v by shared edges through v
-        parent = {f: f for f in fl}
-
-        def find(x: int) -> int:
-            while parent[x] != x:
-                parent[x] = parent[parent[x]]
-                x = parent[x]
-            return x
-
-        by_other: dict[int, list[int]] = {}
-        for f in fl:
-            for w in faces[f].tolist():
-                if w != v:
-                    by_other.setdefault(w, []).append(f)
-        for group in by_other.values():
-            for g in group[1:]:
-                parent[find(g)] = find(group[0])
-        fans: dict[int, list[int]] = {}
-        for f in fl:
-            fans.setdefault(find(f), []).append(f)
-        if len(fans) > 1:
-            out[v] = list(fans.values())
-    return out
+    corner = np.arange(3 * nf).reshape(nf, 3)
+    fa, fb = faces[pairs[:, 0]], faces[pairs[:, 1]]
+    rows, cols = [], []
+    for ka in range(3):
+        for kb in range(3):
+            m = fa[:, ka] == fb[:, kb]  # the pair's shared edge passes this vertex
+            rows.append(corner[pairs[m, 0], ka])
+            cols.append(corner[pairs[m, 1], kb])
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    g = sp.coo_matrix((np.ones(len(r)), (r, c)), shape=(3 * nf, 3 * nf))
+    _, fan = connected_components(g, directed=False)
+    vert = faces.ravel()
+    # fans per vertex: distinct (vertex, fan) pairs, one int64 key each
+    vf = np.unique(vert * (3 * nf) + fan) // (3 * nf)
+    many = vf[np.r_[False, vf[1:] == vf[:-1]]]
+    groups: dict[int, dict[int, list[int]]] = {}
+    at = np.isin(vert, many)
+    for v, f, k in zip(vert[at].tolist(), (np.flatnonzero(at) // 3).tolist(), fan[at].tolist()):
+        groups.setdefault(v, {}).setdefault(k, []).append(f)
+    return {v: list(g.values()) for v, g in groups.items()}

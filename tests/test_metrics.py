@@ -40,6 +40,24 @@ def test_topology_summaries():
     s = icosphere(2)
     o = topology(s.faces[~cap(s, [0, 0, 1], 30)])
     assert not o.watertight and o.boundary_loops == 1 and o.components == 1 and o.genus == 0 and o.euler == 1
+    assert t.manifold_vertices and o.manifold_vertices
+
+
+def test_two_closed_surfaces_pinched_at_a_vertex_are_not_manifold_there():
+    """Two spheres glued at one vertex: every edge has two faces, and each closed fan has as many
+    links as faces, so only the fans themselves tell the pinch (vertex_fans)."""
+    from algorithms.topology import nonmanifold_vertices, vertex_fans
+
+    s = icosphere(1)
+    f2 = s.faces + s.n_vertices
+    f2[f2 == s.n_vertices] = 0  # the second sphere's vertex 0 is the first's
+    faces = np.vstack([s.faces, f2])
+    t = topology(faces)
+    assert t.watertight and t.manifold_edges and not t.manifold_vertices
+    assert nonmanifold_vertices(faces).tolist() == [0]
+    fans = vertex_fans(faces)[0]
+    assert sorted(len(f) for f in fans) == [5, 5]  # an icosphere vertex of valence 5, twice
+    assert set(fans[0]) | set(fans[1]) == set(np.flatnonzero((faces == 0).any(axis=1)).tolist())
 
 
 def test_distance_to_unit_offset_surface():
