@@ -290,8 +290,9 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
 
     def along_edge_to_copy(a: int, b: int) -> int | None:
         """A copy of ``b`` next to ``a`` on a's loop, or None. A line from a to b then ends where the
-        border edge from a ends: it joins the islands at that copy (torus cut into two islands that
-        touch at two vertices: a bridge along the border edge up to a copy closed a two-face pillow)."""
+        border edge from a ends: it joins the islands at that copy (annulus sweep cut 8:0, islands
+        touching at a vertex: a bridge along the border edge up to the copy was walked twice and the
+        edge got four faces)."""
         k, i = loop_of[a]
         lp = loops[k]
         near = {int(lp[i - 1]), int(lp[(i + 1) % len(lp)])}
