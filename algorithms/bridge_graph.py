@@ -139,9 +139,10 @@ class BoundaryEdges:
         return (min(b.start, b.end), max(b.start, b.end)) in self._face_edges
 
     def distance(self, p0: NDArray[np.float64], p1: NDArray[np.float64], skip: set[int],
-                 radius: float) -> NDArray[np.float64]:
-        """(K,) each segment p0[k] -> p1[k]'s distance to the nearest boundary edge not at a vertex
-        of ``skip``, nor of a fragment that holds all of ``skip`` (inf beyond ``radius``)."""
+                 radius: float, fragments_only: bool = False) -> NDArray[np.float64]:
+        """(K,) each segment p0[k] -> p1[k]'s distance to the nearest boundary edge (fragment edge, if
+        ``fragments_only``) not at a vertex of ``skip``, nor of a fragment that holds all of ``skip``
+        (inf beyond ``radius``)."""
         out = np.full(len(p0), np.inf)
         if self.tree is None or not len(p0):
             return out
@@ -155,6 +156,8 @@ class BoundaryEdges:
         own = [k for k, vs in enumerate(self._fragment_vertices) if skip <= vs]
         if own:
             keep &= ~np.isin(self.group[e], own)
+        if fragments_only:
+            keep &= self.group[e] >= 0
         seg, e = seg[keep], e[keep]
         # every (segment, nearby edge) pair at once; the nearest per segment
         np.minimum.at(out, seg, segment_distance(p0[seg], p1[seg], self.a[e], self.b[e]))
@@ -162,7 +165,9 @@ class BoundaryEdges:
 
     def runs_along(self, b: Bridge, vertices: NDArray[np.float64], frac: float) -> bool:
         """Whether the middle half of ``b`` (by arc length) passes within ``frac`` x its length of
-        a boundary edge not at its ends (crossing one included)."""
+        a boundary edge not at its ends (crossing one included), or any part of it of a fragment's
+        edge (a fragment is surface: a bridge that crosses it near its end cuts a chain of
+        fragments in two, annulus sweep cut 8:1)."""
         poly = b.polyline(vertices)
         seg = np.linalg.norm(np.diff(poly, axis=0), axis=1)
         total = float(seg.sum())
@@ -173,7 +178,10 @@ class BoundaryEdges:
         t = np.concatenate([[0.25 * total], s[inner], [0.75 * total]])
         mid = np.stack([np.interp(t, s, poly[:, k]) for k in range(3)], axis=1)
         tol = frac * total
-        return bool((self.distance(mid[:-1], mid[1:], {b.start, b.end}, tol) < tol).any())
+        if (self.distance(mid[:-1], mid[1:], {b.start, b.end}, tol) < tol).any():
+            return True
+        return bool(self._fragment_vertices and
+                    (self.distance(poly[:-1], poly[1:], {b.start, b.end}, tol, fragments_only=True) < tol).any())
 
 
 def segment_distance(p0: NDArray[np.float64], p1: NDArray[np.float64], q0: NDArray[np.float64],

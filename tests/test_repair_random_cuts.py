@@ -482,3 +482,20 @@ def test_a_line_along_the_border_to_a_copy_is_a_join_at_the_copy():
     joins = [b for b in res.bridges if b.kind == "island" and not len(b.points) and b.start != b.end
              and origin[b.start] == origin[b.end]]
     assert joins
+
+
+def test_no_bridge_cuts_a_chain_of_fragments_near_its_end():
+    """trimesh annulus cut 8:1 (four balls and a slab): two fragments set aside by normalisation
+    touch at a corner, one hanging at island 0, the other at a one-face island. An island bridge
+    passed that corner at 92 % of its length, outside the middle half that the boundary test
+    reads; it put the two fragments in different holes, each closed around its own fragment, and
+    the corner was left with two fans (a pinch: genus 2.5 light, 1.5 full by Euler; the full mode
+    is mended the same way). A fragment's edges are now tested over the whole bridge."""
+    model = annulus_cut([(1796, 0.29222942938044216), (899, 0.12137061748201888), (5064, 0.24577461015215116),
+                         (1385, 0.2680914635598419)],
+                        ([0.8790834174004029, -0.32009584127102236, 2.0336374406574547], -0.001431203344942499,
+                         0.07424030731653593), 0, 8)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_closed_manifold(res, genus=1)
+    assert topology(res.mesh.faces).manifold_vertices
+    assert_input_kept(model, res.mesh, fragments=True)
