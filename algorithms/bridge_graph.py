@@ -107,9 +107,13 @@ class BoundaryEdges:
                  faces: NDArray[np.int64] | None = None,
                  fragments: list[NDArray[np.int64]] | None = None) -> None:
         # faces: the surface's faces, for ``is_edge``
-        self._face_edges: set[tuple[int, int]] = set()
+        # the surface's edges as sorted keys lo * n + hi (a set of tuples cost 60 ms on the bunny)
+        self._face_edges = np.zeros(0, dtype=np.int64)
+        self._n = len(vertices)
         if faces is not None and len(faces):
-            self._face_edges = set(map(tuple, edge_table(np.asarray(faces, dtype=np.int64)).edges.tolist()))
+            fe = edge_table(np.asarray(faces, dtype=np.int64)).edges
+            self._n = max(self._n, int(fe.max()) + 1)
+            self._face_edges = np.sort(fe[:, 0] * self._n + fe[:, 1])
         e = [np.stack([lp, np.roll(lp, -1)], axis=1) for lp in loops if len(lp) >= 2]
         # the fragment each edge belongs to (-1: a loop edge), and each fragment's vertices
         group = [np.full(len(x), -1) for x in e]
@@ -134,9 +138,12 @@ class BoundaryEdges:
         copies are merged later: counting copies refused the tunnel bridge of the featuretype slab
         cut (tests/test_repair_cad_cuts.py), genus 9 -> 8; the darning's pinch merge guards that
         case (repair's bare split chords, ``_is_edge`` with origins)."""
-        if len(b.points) or not self._face_edges:
+        lo, hi = min(b.start, b.end), max(b.start, b.end)
+        if len(b.points) or not len(self._face_edges) or hi >= self._n:  # a new vertex is on no face
             return False
-        return (min(b.start, b.end), max(b.start, b.end)) in self._face_edges
+        key = lo * self._n + hi
+        i = int(np.searchsorted(self._face_edges, key))
+        return i < len(self._face_edges) and int(self._face_edges[i]) == key
 
     def distance(self, p0: NDArray[np.float64], p1: NDArray[np.float64], skip: set[int],
                  radius: float, fragments_only: bool = False) -> NDArray[np.float64]:
