@@ -499,3 +499,23 @@ def test_no_bridge_cuts_a_chain_of_fragments_near_its_end():
     assert_closed_manifold(res, genus=1)
     assert topology(res.mesh.faces).manifold_vertices
     assert_input_kept(model, res.mesh, fragments=True)
+
+
+def test_a_hole_in_a_plane_face_reaching_its_edge_is_filled_in_the_plane():
+    """trimesh's box (subdivided four times) cut 1:0 (two balls and a slab): one hole lies on the
+    bottom face and reaches the edge to a side face along its border. The side faces entered its
+    fairing, and the APSS fit of the input around it (spheres across the sharp edge) pushed its
+    middle 1.2 % of the diagonal below the face (MeshLib exact). A hole whose flat border's faces
+    lie in its plane or stand sharp on it is a piece of a plane face: filled in that plane
+    (repair._flat_fills)."""
+    from algorithms.metrics import point_to_surface
+
+    truth = trimesh_model("box")
+    model = random_cut(truth, [(723, 0.06433735872745577), (1213, 0.040357668358269906)],
+                       ([0.34062707227953215, -2.1823465910717035, 2.7389284255563333], -0.19473613976761456,
+                        0.03568224667199713), 0, 1)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_closed_manifold(res, genus=0)
+    assert_input_kept(model, res.mesh)
+    off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
+    assert off < 1e-9
