@@ -35,25 +35,76 @@ def min_angles(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArr
 
 
 def forced_faces(vertices: NDArray[np.float64], patch: NDArray[np.int64], border_edges: NDArray[np.int64], *,
-                 below: float = 20.0) -> NDArray[np.bool_]:
+                 below: float = 20.0, creases: NDArray[np.int64] | None = None) -> NDArray[np.bool_]:
     """(P,) whether each patch face's smallest angle (below ``below`` degrees) is **forced** by the
     input: it lies at a corner between two input border edges (``border_edges`` (E, 2), the edges
     of the hole borders, i.e. of the input faces used once). Every fill of that hole has that
     corner's angle, or smaller ones, there (e.g. a hole border corner of 10 degrees), so no patch
-    can avoid it. Every other angle below the bound is unforced."""
+    can avoid it. Every other angle below the bound is unforced.
+
+    ``creases`` (K, 2): patch edges that lie along a crease of the true surface leaving a border
+    vertex (``along_true_creases``). A corner between a border edge and such an edge is forced too:
+    a fill close to the truth has its crease there, so the wedge between the border and the crease
+    is the same in every such fill (the fandisk's or featuretype's crease entering a hole at a
+    small angle to the border)."""
     f = np.asarray(patch, dtype=np.int64).reshape(-1, 3)
     if not len(f):
         return np.zeros(0, dtype=bool)
     e = np.asarray(border_edges, dtype=np.int64).reshape(-1, 2)
-    nv = int(max(f.max(), e.max() if len(e) else 0)) + 1
-    keys = np.unique(np.sort(e, axis=1) @ np.array([nv, 1])) if len(e) else np.zeros(0, np.int64)
+    c = np.asarray(creases, dtype=np.int64).reshape(-1, 2) if creases is not None else np.zeros((0, 2), np.int64)
+    nv = int(max(f.max(), e.max() if len(e) else 0, c.max() if len(c) else 0)) + 1
+
+    def keys(x: NDArray[np.int64]) -> NDArray[np.int64]:
+        return np.unique(np.sort(x, axis=1) @ np.array([nv, 1])) if len(x) else np.zeros(0, np.int64)
+
+    kb, kc = keys(e), keys(c)
     ang = triangle_angles(vertices, f)
     k = np.argmin(ang, axis=1)
     r = np.arange(len(f))
     x, a, b = f[r, k], f[r, (k + 1) % 3], f[r, (k + 2) % 3]
-    on = (np.isin(np.minimum(x, a) * nv + np.maximum(x, a), keys)
-          & np.isin(np.minimum(x, b) * nv + np.maximum(x, b), keys))
+    ka, kb_ = np.minimum(x, a) * nv + np.maximum(x, a), np.minimum(x, b) * nv + np.maximum(x, b)
+    ba, bb = np.isin(ka, kb), np.isin(kb_, kb)
+    on = (ba & bb) | (ba & np.isin(kb_, kc)) | (bb & np.isin(ka, kc))
     return on & (ang[r, k] < below)
+
+
+def along_true_creases(vertices: NDArray[np.float64], edges: NDArray[np.int64], truth_vertices: NDArray[np.float64],
+                       truth_faces: NDArray[np.int64], *, angle: float = 40.0, within: float = 10.0,
+                       tol: float = 1e-9) -> NDArray[np.bool_]:
+    """(E,) whether each edge (x, y) leaves a vertex x of the truth (within ``tol`` of the
+    diagonal) along one of the truth's sharp edges at x (dihedral above ``angle`` degrees): the
+    edge's direction within ``within`` degrees of that sharp edge's. Both ends are tried."""
+    from scipy.spatial import cKDTree
+
+    from .creases import sharp_edges
+
+    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    out = np.zeros(len(e), dtype=bool)
+    tv = np.asarray(truth_vertices, dtype=np.float64)
+    sharp, _ = sharp_edges(tv, np.asarray(truth_faces, dtype=np.int64), angle)
+    if not len(e) or not len(sharp):
+        return out
+    v = np.asarray(vertices, dtype=np.float64)
+    diag = float(np.linalg.norm(tv.max(axis=0) - tv.min(axis=0)))
+    d, at = cKDTree(tv).query(v)
+    at = np.where(d <= tol * diag, at, -1)
+    dirs: dict[int, list[NDArray[np.float64]]] = {}
+    for a, b in sharp.tolist():
+        u = tv[b] - tv[a]
+        u /= np.linalg.norm(u)
+        dirs.setdefault(a, []).append(u)
+        dirs.setdefault(b, []).append(-u)
+    cos = np.cos(np.radians(within))
+    for i, (p, q) in enumerate(e.tolist()):
+        for x, y in ((p, q), (q, p)):
+            if at[x] < 0 or at[x] not in dirs:
+                continue
+            w = v[y] - v[x]
+            w /= max(float(np.linalg.norm(w)), 1e-300)
+            if any(float(w @ u) > cos for u in dirs[int(at[x])]):
+                out[i] = True
+                break
+    return out
 
 
 @dataclass(frozen=True)

@@ -17,8 +17,9 @@ point-to-surface both ways, fractions of the truth's bounding-box diagonal); the
 patch faces (output faces that are not input faces), the share of patch triangles whose min
 angle is below 20 degrees and the share of patch angles below 20 degrees (the issue's target is
 worded on angles: three per triangle), each over every patch triangle and over the unforced ones (a
-triangle is forced when its smallest angle lies between two input border edges,
-metrics.forced_faces; its one forced angle is left out); wall time of the tool's call.
+triangle is forced when its smallest angle lies between two input border edges, or between an
+input border edge and a patch edge along a crease of the truth, metrics.forced_faces; its one
+forced angle is left out); wall time of the tool's call.
 """
 
 from __future__ import annotations
@@ -303,10 +304,17 @@ def score(case: BenchCase, V2: NDArray[np.float64], F2: NDArray[np.int64], *, sa
     patch = mf[~np.isin(out_keys, in_keys)]
     every = metrics.triangle_angles(mv, patch) if len(patch) else np.zeros((0, 3))
     ang = every.min(axis=1)
-    # forced: the smallest angle lies between two input border edges (metrics.forced_faces)
+    # forced: the smallest angle lies between two input border edges, or between a border edge and
+    # a patch edge along a crease of the truth (metrics.forced_faces, metrics.along_true_creases)
     ein = edge_table(fin[found]) if found.any() else None
     border = ein.edges[ein.counts == 1] if ein is not None else np.zeros((0, 2), np.int64)
-    forced = metrics.forced_faces(mv, patch, border) if len(patch) else np.zeros(0, dtype=bool)
+    creases = None
+    if ref is not None and len(patch) and len(border):
+        pe = edge_table(patch).edges
+        pe = pe[np.isin(pe, border).any(axis=1)]  # only edges at a border vertex can meet a border edge
+        creases = pe[metrics.along_true_creases(mv, pe, ref.vertices, ref.faces, tol=1e-6)]
+    forced = (metrics.forced_faces(mv, patch, border, creases=creases) if len(patch)
+              else np.zeros(0, dtype=bool))
     free = ang[~forced]
     row = {"watertight": watertight, "components": int(comps), "genus": genus, "topology_right": right,
            "kept": kept, "new_faces": int(len(patch)),
@@ -442,7 +450,10 @@ def markdown(rows: list[dict], cases: list[BenchCase], notes: list[str], samples
         "Forced: a patch triangle whose smallest angle (below 20°) lies at a corner between two input "
         "border edges (`algorithms.metrics.forced_faces`): every fill of that hole has that angle, or "
         "smaller ones, at that corner (a hole border corner of 10° makes a 10° patch angle), so no "
-        "refinement can remove it. The unforced columns leave out those triangles (the min angle), or "
+        "refinement can remove it; or at a corner between an input border edge and a patch edge that "
+        "runs along a crease of the truth leaving that border vertex (within 10° of the truth's sharp "
+        "edge, `algorithms.metrics.along_true_creases`): every fill that keeps the true crease has "
+        "that wedge. The unforced columns leave out those triangles (the min angle), or "
         "their one forced angle (the share of angles); the shares stay over all patch triangles or "
         "angles. The issue words its target on angles (three per triangle): the verdicts use the share "
         "of angles below 20°; the share of triangles with an angle below 20° is the stricter measure "

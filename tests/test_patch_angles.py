@@ -1,12 +1,12 @@
 """Patch angles after the Delaunay refinement (darning.refine.refine_angles) and the forced-angle
-classification of the repair benchmark (metrics.forced_faces)."""
+classification of the repair benchmark (metrics.forced_faces, metrics.along_true_creases)."""
 
 import numpy as np
 
 from algorithms.cases import cap, cut, icosphere
 from algorithms.darning import triangulate
 from algorithms.darning.refine import corner_angles, refine_angles
-from algorithms.metrics import forced_faces, triangle_angles
+from algorithms.metrics import along_true_creases, forced_faces, triangle_angles
 from algorithms.normalize import normalize
 from algorithms.repair import repair
 from algorithms.topology import edge_table
@@ -74,6 +74,32 @@ def test_forced_faces_needs_two_border_edges_at_the_small_corner():
     assert forced_faces(v, f, np.array([[0, 1], [2, 0]])).tolist() == [True]
     assert forced_faces(v, f, np.array([[0, 1], [1, 2]])).tolist() == [False]  # one border edge at the tip
     assert forced_faces(v, f, np.array([[0, 1], [2, 0]]), below=5.0).tolist() == [False]  # 10 deg is not < 5
+
+
+def test_a_corner_between_the_border_and_a_true_crease_is_forced():
+    v = np.array([[0, 0, 0], [1, np.tan(np.radians(5)), 0], [1, -np.tan(np.radians(5)), 0.0]])
+    f = np.array([[0, 1, 2]])  # 10 degrees at vertex 0
+    border, crease = np.array([[0, 1]]), np.array([[2, 0]])
+    assert forced_faces(v, f, border).tolist() == [False]  # one border edge alone does not force it
+    assert forced_faces(v, f, border, creases=crease).tolist() == [True]
+    assert forced_faces(v, f, np.zeros((0, 2), np.int64), creases=np.array([[0, 1], [2, 0]])).tolist() == [False]
+    assert forced_faces(v, f, np.array([[1, 2]]), creases=crease).tolist() == [False]  # border edge not at 0
+
+
+def test_an_edge_along_a_sharp_edge_of_the_truth_is_on_a_true_crease():
+    # the truth: two triangles folded at 90 degrees along (0,0,0)-(1,0,0)
+    tv = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, 0, 1.0]])
+    tf = np.array([[0, 1, 2], [1, 0, 3]])
+    t5 = np.tan(np.radians(5))
+    v = np.array([[0, 0, 0], [0.5, 0.5 * t5, 0], [0.5, 0.5, 0], [0.5, 0.1, 0.1], [2, 2, 2.0]])
+    e = np.array([[0, 1], [1, 0], [0, 2], [4, 1]])
+    # 5 degrees off the sharp edge at vertex 0 (either order), 45 degrees off, not on the truth
+    assert along_true_creases(v, e, tv, tf).tolist() == [True, True, False, False]
+    assert along_true_creases(v, e, tv, tf, within=4.0).tolist() == [False, False, False, False]
+    # the same fold opened to 30 degrees is not sharp at 40
+    flat = tv.copy()
+    flat[3] = [0.5, -np.cos(np.radians(30)), np.sin(np.radians(30))]
+    assert along_true_creases(v, e, flat, tf).tolist() == [False] * 4
 
 
 def test_hole_on_a_sphere_has_no_patch_angle_below_20_degrees():
