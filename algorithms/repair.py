@@ -752,7 +752,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             timings_note["fairing"] += f" + RBF on {len(tips)} thin parts ({sum(t[3] for t in tips)} bands)"
             movable = np.unique(np.concatenate([movable, np.arange(n_input, len(V))]))
             movable = np.setdiff1d(movable, keep_still)
-            if fit is not None:  # a thin part's fill follows its RBF from here on, never the APSS again (the
+            if fit is not None and tips:  # a thin part's fill follows its RBF from here on, never the APSS again (the
                 # re-projection after the relaxation threw such a vertex 0.2 -> 0.73 % of the diagonal off the
                 # bunny cut into islands; the RBF's own re-projection below reaches one edge only)
                 moved = np.setdiff1d(moved, np.concatenate([t[1] for t in tips]))

@@ -519,3 +519,11 @@ def test_a_hole_in_a_plane_face_reaching_its_edge_is_filled_in_the_plane():
     assert_input_kept(model, res.mesh)
     off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
     assert off < 1e-9
+
+
+def test_thin_parts_none_of_which_could_be_lifted():
+    """bunny 5:0 (one ball of 8.6 % of the diagonal, no free points): thin parts were found but no
+    lift was kept (each folded its fill); leaving the lifted fills out of the APSS re-projection
+    then met an empty list and raised "need at least one array to concatenate"."""
+    model = random_cut("bunny_closed.ply", [(1230, 0.08590638086319459)], None, 0, 5)
+    assert_closed_manifold(repair(model), 0)
