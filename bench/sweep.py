@@ -93,6 +93,16 @@ def _flat_torus() -> Mesh:
     return Mesh(v, m.faces)
 
 
+def _frep(name: str) -> Mesh:
+    """A bundled F-rep demo object triangulated by our F-rep mesher (``bridgefield frep --demo NAME
+    --qlev 6``): smooth shapes no bench case is cut from (boxsphere has creases: a cube and a sphere
+    joined by R-functions)."""
+    from algorithms.frep.objects import demo_object
+    from algorithms.frep.pipeline import FrepParams, triangulate_object
+
+    return triangulate_object(demo_object(name), FrepParams(qlev=6)).mesh
+
+
 # name -> (loader, genus)
 MODELS = {
     "ellipsoid": (lambda: gen.ellipsoid((1.4, 1.0, 0.7), subdivisions=5), 0),
@@ -104,6 +114,8 @@ MODELS = {
     "featuretype": (lambda: load("featuretype.stl"), 9),
     "torus": (lambda: load("torus.stl"), 1),
     "bunny": (lambda: load("bunny_closed.ply"), 0),
+    **{f"frep-{name}": (functools.partial(_frep, name), genus)
+       for name, genus in (("blob", 0), ("perturbed", 0), ("boxsphere", 0), ("torus", 1))},
 }
 
 
