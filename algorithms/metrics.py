@@ -88,22 +88,24 @@ def along_true_creases(vertices: NDArray[np.float64], edges: NDArray[np.int64], 
     diag = float(np.linalg.norm(tv.max(axis=0) - tv.min(axis=0)))
     d, at = cKDTree(tv).query(v)
     at = np.where(d <= tol * diag, at, -1)
-    dirs: dict[int, list[NDArray[np.float64]]] = {}
-    for a, b in sharp.tolist():
-        u = tv[b] - tv[a]
-        u /= np.linalg.norm(u)
-        dirs.setdefault(a, []).append(u)
-        dirs.setdefault(b, []).append(-u)
-    cos = np.cos(np.radians(within))
-    for i, (p, q) in enumerate(e.tolist()):
-        for x, y in ((p, q), (q, p)):
-            if at[x] < 0 or at[x] not in dirs:
-                continue
-            w = v[y] - v[x]
-            w /= max(float(np.linalg.norm(w)), 1e-300)
-            if any(float(w @ u) > cos for u in dirs[int(at[x])]):
-                out[i] = True
-                break
+    # the truth's sharp half-edges (both directions), grouped by their start vertex
+    src = np.concatenate([sharp[:, 0], sharp[:, 1]])
+    u = np.concatenate([tv[sharp[:, 1]] - tv[sharp[:, 0]], tv[sharp[:, 0]] - tv[sharp[:, 1]]])
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    order = np.argsort(src, kind="stable")
+    src, u = src[order], u[order]
+    # every (edge, direction) against every sharp half-edge leaving the truth vertex it starts at
+    x = np.concatenate([e[:, 0], e[:, 1]])
+    y = np.concatenate([e[:, 1], e[:, 0]])
+    s = at[x]
+    lo = np.searchsorted(src, s, side="left")
+    n = np.where(s >= 0, np.searchsorted(src, s, side="right") - lo, 0)
+    q = np.repeat(np.arange(len(x)), n)
+    h = np.repeat(lo - np.cumsum(n) + n, n) + np.arange(int(n.sum()))
+    w = v[y[q]] - v[x[q]]
+    w /= np.maximum(np.linalg.norm(w, axis=1, keepdims=True), 1e-300)
+    hit = np.einsum("ij,ij->i", w, u[h]) > np.cos(np.radians(within))
+    out[np.unique(q[hit] % len(e))] = True
     return out
 
 
