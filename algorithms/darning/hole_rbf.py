@@ -30,8 +30,10 @@ a vertex by more than ``doubt`` = half an edge length are judged (an RBF fit cos
 bunny cut into 60 holes, 3 holes instead of 25 with any move, its Hausdorff 0.76 -> 0.63 %). At one
 edge, a hole the APSS moved by 0.86 edge went unjudged: 1.65 % of the diagonal off on a cut of the
 F-rep 'perturbed' object where the fairing was at 0.3 % (0.45 % judged); on 80 random cuts of the
-four F-rep demo objects, eight runs improved (max 1.66 -> 1.09 %), none got worse, and the bench
-cases did not change. The
+four F-rep demo objects, eight runs improved (max 1.66 -> 1.09 %), none got worse; on the
+random-cut sweep (bench/sweep.py, 760 runs) 22 improved (torus 5:1 1.15 -> 0.09 %) and one got
+worse (annulus 7:0 full 0.72 -> 1.16 %, flat rings where the RBF rounds); the bench cases did not
+change. The
 re-projection after the tangential relaxation keeps the APSS for the vertices that took its whole
 move, the others stay where the median put them (the relaxation moves them along the surface).
 
