@@ -917,13 +917,17 @@ def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: 
     everywhere), the shortest pair, with Q = 0. ``accept(i, j)``: a further test (e.g. not along
     the boundary), tried on the ``tries`` best pairs in order; when none passes, the best pair.
     """
-    from .field.quality import q1, q4, q_topological, s_vectors
+    from .field.quality import log_q1, q4, q_topological, s_vectors
 
     a, b = pa[:, None, :], pb[None, :, :]
     sa, _ = s_vectors(a, ta[:, None, :], b, tb[None, :, :])  # (1a), (1b)
     qt = q_topological(a, ta[:, None, :], b, tb[None, :, :])  # (2)
     L = np.linalg.norm(b - a, axis=2)
-    Q = np.where(qt > 0, qt * q1(L, max(lc, 1e-12), kernel) * (1 + ki * q4(sa, na[:, None, :])), -np.inf)  # (9)
+    # (9) ranked by its log: with every pair many L_c long, q1 underflows to 0 for all of them and
+    # the first pair would win (frep-boxsphere cut 10:1, L_c = 0.02 edge: a chord across the pinch)
+    with np.errstate(divide="ignore"):
+        Q = np.where(qt > 0, np.log(np.maximum(qt, 0.0)) + log_q1(L, max(lc, 1e-12), kernel)
+                     + np.log1p(ki * q4(sa, na[:, None, :])), -np.inf)
     compatible = bool(np.isfinite(Q).any())
     # best quality first; when no pair is compatible, shortest first
     best = int(np.argmax(Q)) if compatible else int(np.argmin(L))
@@ -933,7 +937,7 @@ def _best_straight_bridge(pa: NDArray[np.float64], ta: NDArray[np.float64], na: 
         order = order[:np.count_nonzero(np.isfinite(Q))] if compatible else order
         best = int(next((k for k in order[1:tries] if accept(*np.unravel_index(int(k), Q.shape))), best))
     i, j = np.unravel_index(best, Q.shape)
-    return int(i), int(j), float(Q[i, j]) if compatible else 0.0
+    return int(i), int(j), float(np.exp(Q[i, j])) if compatible else 0.0
 
 
 def _off_boundary(boundary: BoundaryEdges | None, V: NDArray[np.float64], along: float, a: NDArray[np.int64],

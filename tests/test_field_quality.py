@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from algorithms.bridges import bridge_factors
-from algorithms.field.quality import basic_task, free_point_g, g0, q1, q3, q_topological
+from algorithms.field.quality import basic_task, free_point_g, g0, log_q1, q1, q3, q_topological
 from algorithms.params import FieldParams
 
 
@@ -85,3 +85,29 @@ def test_ki_favours_the_tangential_continuation():
         ratios.append(q_tan.Q / q_ang.Q)
     assert ratios[0] == pytest.approx(1.0)  # k_i = 0 ignores the continuation
     assert ratios[0] < ratios[1] < ratios[2]
+
+
+@pytest.mark.parametrize("kernel", ["gauss", "cauchy"])
+def test_log_q1_is_the_log_of_q1_and_still_orders_where_q1_underflows(kernel):
+    L = np.linspace(0, 5, 101)
+    assert np.allclose(log_q1(L, 0.7, kernel), np.log(q1(L, 0.7, kernel)))
+    far = np.array([40.0, 50.0, 60.0]) * 0.7
+    if kernel == "gauss":
+        assert np.all(q1(far, 0.7, kernel) == 0.0)  # exp(-1600) underflows
+    assert np.all(np.diff(log_q1(far, 0.7, kernel)) < 0)
+
+
+def test_straight_bridge_with_every_pair_far_beyond_lc_is_the_shortest_compatible():
+    """Two parallel rows of border points walked in opposite directions (a band between two rims),
+    L_c a thousandth of their gap: every q1 underflows to 0, and the best pair must still be a
+    shortest one (a rung of the band), not the first pair of the matrix."""
+    from algorithms.repair import _best_straight_bridge
+
+    x = np.linspace(0.0, 1.0, 11)
+    pa = np.stack([x, np.zeros_like(x), np.zeros_like(x)], axis=1)
+    pb = np.stack([x[::-1], np.full_like(x, 0.1), np.zeros_like(x)], axis=1)
+    ta, tb = np.tile([1.0, 0, 0], (11, 1)), np.tile([-1.0, 0, 0], (11, 1))
+    na = np.tile([0.0, -1, 0], (11, 1))  # the surface continues away from the band at A
+    i, j, q = _best_straight_bridge(pa, ta, na, pb, tb, lc=1e-4, ki=1.0)
+    assert np.linalg.norm(pa[i] - pb[j]) == pytest.approx(0.1)
+    assert q == 0.0  # exp(-(0.1 / 1e-4)^2): the quality itself does underflow

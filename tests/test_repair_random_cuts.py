@@ -527,3 +527,23 @@ def test_thin_parts_none_of_which_could_be_lifted():
     then met an empty list and raised "need at least one array to concatenate"."""
     model = random_cut("bunny_closed.ply", [(1230, 0.08590638086319459)], None, 0, 5)
     assert_closed_manifold(repair(model), 0)
+
+
+def test_a_band_whose_rims_touch_is_split_beside_itself_not_across_the_pinch():
+    """frep-boxsphere 10:1 (the F-rep cube-and-sphere, a ball and a slab right round the body): the
+    two rims of the slab touch at many copies, so L_c came out at 0.02 of an edge and the straight
+    bridge across the figure-8 hole had q1 = 0.0 for every pair: the first pair won, a chord across
+    the pinch that left each rim its own hole, capped across the body (30.8 % of the diagonal off).
+    Ranked by the log of (9), the chord joins the rims beside each other: two strips."""
+    from algorithms.metrics import point_to_surface
+    from bench.sweep import _frep
+
+    truth = _frep("boxsphere")
+    model = random_cut(truth, [(2330, 0.12126708052898505)],
+                       ([-0.7542864034490233, -1.9126935126320244, 0.16749760823446763], 0.005026759777498009,
+                        0.03190053357780217), 0, 10)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_closed_manifold(res, genus=0)
+    assert_input_kept(model, res.mesh)
+    off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
+    assert off < 0.01  # 0.27 %

@@ -35,6 +35,17 @@ def q1(length: Arr | float, lc: float, kernel: str = "gauss") -> Arr:
     raise ValueError(f"unknown q1 kernel {kernel!r}")
 
 
+def log_q1(length: Arr | float, lc: float, kernel: str = "gauss") -> Arr:
+    """log of (3), without the underflow of :func:`q1`: a ranking by q1 of lengths many L_c long
+    (exp(-(L/Lc)^2) is 0.0 from L = 27 Lc on) still orders them, shortest first."""
+    x2 = (np.asarray(length, dtype=np.float64) / lc) ** 2
+    if kernel == "gauss":
+        return -x2
+    if kernel == "cauchy":
+        return -np.log1p(x2)
+    raise ValueError(f"unknown q1 kernel {kernel!r}")
+
+
 def g0(kt: float) -> float:
     """G(0) = k_t / (1 - k_t), the weight of a free point at distance 0 (eq. 4)."""
     return kt / (1.0 - kt)
