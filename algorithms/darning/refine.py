@@ -733,7 +733,17 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
         return _encroached(p, se, x)
 
     ok_pt &= ~encroaches(q)
-    # the fallback: the longest edge of the face that may split (not a border / locked / single edge)
+    # the fallback: the longest edge of the face that may split (not a border / locked / single edge);
+    # its midpoint's encroachment does not change during the round (the stuck edges do not), so it
+    # is tested for every bad face at once
+    tri = p[f[bad]]
+    el_all = np.linalg.norm(tri[:, [1, 2, 0]] - tri, axis=2)
+    el_all[stuck[bad]] = -1
+    e_all = np.argmax(el_all, axis=1)
+    ea_all = f[bad, e_all]
+    eb_all = f[bad, (e_all + 1) % 3]
+    mp_all = (p[ea_all] + p[eb_all]) / 2
+    mp_enc = encroaches(mp_all)
     he = halfedges(f)
     hkey = he[:, 0] * len(p) + he[:, 1]
     order = np.argsort(hkey)
@@ -741,14 +751,17 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     new: list[NDArray[np.float64]] = []
     faces = [f]
     grow: list[NDArray[np.int64]] = []
-    accepted: list[NDArray[np.float64]] = []
-    acc_r: list[float] = []
+    # the points accepted this round and their clearance radii (at most one per bad face)
+    acc, acc_r, n_acc = np.empty((len(bad), 3)), np.empty(len(bad)), 0
+
+    def clear_of_accepted(x: NDArray[np.float64]) -> bool:
+        return bool(np.all(np.sqrt(((acc[:n_acc] - x) ** 2).sum(axis=1)) > acc_r[:n_acc]))
     for i in range(len(bad)):  # sequential: a greedy independent set, worst face first (tens of faces)
         fi = int(bad[i])
         if taken[fi]:
             continue
         host = -1
-        if ok_pt[i] and all(np.linalg.norm(q[i] - c) > rr for c, rr in zip(accepted, acc_r)):
+        if ok_pt[i] and clear_of_accepted(q[i]):
             if inside[i]:
                 host = fi
             else:  # an obtuse corner at a or b: the point lies across the edge (x, a) or (b, x)
@@ -768,29 +781,27 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
             nh /= max(float(np.linalg.norm(nh)), 1e-300)
             q[i] -= ((q[i] - th[0]) @ nh) * nh  # in the plane of the face it splits
             new.append(q[i])
-            accepted.append(q[i])
-            acc_r.append(0.5 * float(lab[i]))
+            acc[n_acc], acc_r[n_acc] = q[i], 0.5 * float(lab[i])
+            n_acc += 1
             i0, i1, i2 = f[host]
             f[host] = (i0, i1, m)
             grow.append(np.array([[i1, i2, m], [i2, i0, m]]))
             continue
-        tri = p[f[fi]]
-        el = np.linalg.norm(tri[[1, 2, 0]] - tri, axis=1)
-        el[stuck[fi]] = -1
-        e = int(np.argmax(el))
+        e = int(e_all[i])
+        el = el_all[i]
         if el[e] <= 0:
             continue
-        ea, eb = f[fi, e], f[fi, (e + 1) % 3]
+        ea, eb = int(ea_all[i]), int(eb_all[i])
         j = order[np.searchsorted(hkey[order], eb * len(p) + ea)]
         g = int(j // 3)
-        mp = (p[ea] + p[eb]) / 2
-        if taken[g] or encroaches(mp)[0] or any(np.linalg.norm(mp - c) <= rr for c, rr in zip(accepted, acc_r)):
+        mp = mp_all[i]
+        if taken[g] or mp_enc[i] or not clear_of_accepted(mp):
             continue
         taken[fi] = taken[g] = True
         m = nv + len(new)
         new.append(mp)
-        accepted.append(mp)
-        acc_r.append(0.25 * float(el[e]))
+        acc[n_acc], acc_r[n_acc] = mp, 0.25 * float(el[e])
+        n_acc += 1
         c = f[fi, (e + 2) % 3]
         dd = f[g, (j % 3 + 2) % 3]
         f[fi] = (ea, m, c)
@@ -828,13 +839,15 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
     if len(cand):  # the vertices in the diametral lens of a border / locked edge first
         cand = cand[np.argsort(~_encroached(p, np.stack([a, b], axis=1), p[cand]), kind="stable")]
     done = 0
+    fixed_of = _Incidence(fixed, nv)
+    face_of = _Incidence(f, nv)  # rebuilt after each collapse (a move leaves the faces as they are)
     for c in cand:  # sequential: each collapse changes the stars of the next candidates
-        rows = np.flatnonzero((f == c).any(axis=1))
+        rows = face_of.rows(int(c))
         if not len(rows):
             continue
         star = f[rows]
         t = p[star]
-        n_old = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        n_old = _cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
         star_ang = corner_angles(p, star).min(axis=1)
         before = star_ang.min()
         n_below = int((star_ang < below).sum()) if below is not None else 0
@@ -845,15 +858,15 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
             if both.sum() != 2:
                 continue
             opp = set(np.unique(star[both]).tolist()) - {int(c), u}
-            nu = set(np.unique(f[(f == u).any(axis=1)]).tolist())
-            nu |= set(np.unique(fixed[(fixed == u).any(axis=1)]).tolist())  # and among the fixed faces
+            nu = set(np.unique(f[face_of.rows(u)]).tolist())
+            nu |= set(np.unique(fixed[fixed_of.rows(u)]).tolist())  # and among the fixed faces
             nu -= {u}
             if nu & ring != opp:
                 continue  # the link condition
             nf = star[~both].copy()
             nf[nf == c] = u
             t2 = p[nf]
-            n_new = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
+            n_new = _cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
             if (np.einsum("ij,ij->i", n_new, n_old[~both]) <= 0).any():
                 continue  # a fold
             new_ang = corner_angles(p, nf).min(axis=1)
@@ -872,8 +885,22 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
         f = f.copy()
         f[rows[~both]] = nf
         f = np.delete(f, rows[both], axis=0)
+        face_of = _Incidence(f, nv)
         done += 1
     return f, done
+
+
+class _Incidence:
+    """The faces at each vertex (sorted face indices), from one stable sort of the corners."""
+
+    def __init__(self, f: NDArray[np.int64], nv: int) -> None:
+        flat = np.asarray(f, dtype=np.int64).reshape(-1)
+        o = np.argsort(flat, kind="stable")
+        self.order = o // 3
+        self.start = np.searchsorted(flat[o], np.arange(nv + 1))
+
+    def rows(self, v: int) -> NDArray[np.int64]:
+        return np.unique(self.order[self.start[v]:self.start[v + 1]])
 
 
 def _cross(u: NDArray[np.float64], w: NDArray[np.float64]) -> NDArray[np.float64]:
