@@ -59,6 +59,14 @@ def assert_closed_manifold(res, genus: int | None = None) -> None:
         assert t.genus == genus
 
 
+def closed_repair(model, genus: int, mode: str = "light"):
+    """The repair of ``model``: closed, one piece, of genus ``genus``, every input face kept."""
+    res = repair(model, RepairParams(field=FieldParams(mode=mode)))
+    assert_closed_manifold(res, genus=genus)
+    assert_input_kept(model, res.mesh)
+    return res
+
+
 def test_passes_near_measures_segments_not_samples():
     chain = np.array([[1.0, 0.0, 0.0]])
     p0, p1 = np.zeros(3), np.array([2.0, 0.0, 0.0])
@@ -349,9 +357,7 @@ def test_a_fill_that_matches_its_border_is_not_refined_off_the_surface():
     model = random_cut(truth, [(76, 0.1622403034464774)],
                        ([-0.6951223578420241, -1.6962086522258644, 0.11160103453774037], 0.4848327912220826,
                         0.045108319747877594), 0, 1)
-    res = repair(model, RepairParams(field=FieldParams(mode="light")))
-    assert_closed_manifold(res, genus=0)
-    assert_input_kept(model, res.mesh)
+    res = closed_repair(model, 0)
     # no point added (the copies normalisation made are joined again)
     assert len(res.mesh.vertices) == truth.n_vertices
     # the new faces lie on the cylinder (the side's quads are planar: either diagonal does)
@@ -542,8 +548,6 @@ def test_a_band_whose_rims_touch_is_split_beside_itself_not_across_the_pinch():
     model = random_cut(truth, [(2330, 0.12126708052898505)],
                        ([-0.7542864034490233, -1.9126935126320244, 0.16749760823446763], 0.005026759777498009,
                         0.03190053357780217), 0, 10)
-    res = repair(model, RepairParams(field=FieldParams(mode="light")))
-    assert_closed_manifold(res, genus=0)
-    assert_input_kept(model, res.mesh)
+    res = closed_repair(model, 0)
     off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
     assert off < 0.01  # 0.27 %

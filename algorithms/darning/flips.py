@@ -51,35 +51,40 @@ def _cross_dot(p: np.ndarray, o: int, x: int, y: int, n: np.ndarray) -> float:
 
 @numba.njit(cache=True)
 def flip_passes(p: np.ndarray, f: np.ndarray, fixed_keys: np.ndarray, locked_keys: np.ndarray,
-                max_passes: int) -> int:
+                max_passes: int, index: bool = True) -> int:
     """Run the flip passes on ``f`` (M, 3) in place; edge keys are min * V + max (V = len(p)),
     fixed_keys / locked_keys sorted. Returns the number of flips.
 
-    The half-edges are indexed once (a dict from a * V + b to the half-edge, the first one when a
-    directed edge repeats, as a stable sort would find it) and the index is kept up to date
-    flip by flip, so a pass costs a walk over the half-edges, not a sort of them."""
+    ``index``: the half-edges are indexed once (a dict from a * V + b to its half-edge, and each
+    half-edge's twin) and the index is kept up to date flip by flip, so a pass walks the half-edges
+    instead of sorting them. A patch in which a directed edge repeats (not an oriented manifold:
+    the dict holds one half-edge per key) sorts them every pass, as ``index=False`` always does;
+    the passes are the same either way."""
     nv = p.shape[0]
     nf = f.shape[0]
     nh = 3 * nf
     total = 0
     if nf == 0:
         return total
-    where = dict()  # directed edge key -> its (first) half-edge
-    repeated = False
-    for h in range(nh):
-        k = f[h // 3, h % 3] * nv + f[h // 3, (h % 3 + 1) % 3]
-        if k in where:
-            repeated = True
-        else:
+    where = dict()  # directed edge key -> its half-edge (index mode)
+    where[-1] = -1
+    twin = np.full(nh, -1, dtype=np.int64)  # index mode: the twin half-edge; sorting: the twin key
+    if index:
+        for h in range(nh):
+            k = f[h // 3, h % 3] * nv + f[h // 3, (h % 3 + 1) % 3]
+            if k in where:
+                index = False  # a directed edge twice
+                break
             where[k] = h
-    if repeated:  # a directed edge twice (not an oriented manifold): sort every pass
-        return _flip_passes_sorted(p, f, fixed_keys, locked_keys, max_passes)
-    twin = np.full(nh, -1, dtype=np.int64)
-    for h in range(nh):
-        k = f[h // 3, (h % 3 + 1) % 3] * nv + f[h // 3, h % 3]
-        if k in where:
-            twin[h] = where[k]
+    if index:
+        for h in range(nh):
+            k = f[h // 3, (h % 3 + 1) % 3] * nv + f[h // 3, h % 3]
+            if k in where:
+                twin[h] = where[k]
     active = np.ones(nf, dtype=np.bool_)
+    key = np.empty(nh, dtype=np.int64)
+    order = np.arange(nh)
+    skey = np.empty(0, dtype=np.int64)
     h1 = np.empty(nh, dtype=np.int64)
     h2 = np.empty(nh, dtype=np.int64)
     score = np.empty(nh, dtype=np.float64)
@@ -88,13 +93,27 @@ def flip_passes(p: np.ndarray, f: np.ndarray, fixed_keys: np.ndarray, locked_key
     n_old = np.empty(3, dtype=np.float64)
     chosen = np.empty(nf, dtype=np.int64)
     for _ in range(max_passes):
+        if not index:
+            for h in range(nh):
+                a = f[h // 3, h % 3]
+                b = f[h // 3, (h % 3 + 1) % 3]
+                key[h] = a * nv + b
+                twin[h] = b * nv + a
+            order = np.argsort(key, kind="mergesort")
+            skey = key[order]
         m = 0  # interior edges next to an active face, each once (a < b), in half-edge order
         for h in range(nh):
             if f[h // 3, h % 3] >= f[h // 3, (h % 3 + 1) % 3]:
                 continue
-            g = twin[h]
-            if g < 0:
-                continue
+            if index:
+                g = twin[h]
+                if g < 0:
+                    continue
+            else:
+                pos = min(np.searchsorted(skey, twin[h]), nh - 1)
+                if skey[pos] != twin[h]:
+                    continue
+                g = order[pos]
             if active[h // 3] or active[g // 3]:
                 h1[m] = h
                 h2[m] = g
@@ -110,9 +129,11 @@ def flip_passes(p: np.ndarray, f: np.ndarray, fixed_keys: np.ndarray, locked_key
             s = _angle_at(p, c, a, b) + _angle_at(p, d, a, b) - np.pi
             if not (s > 1e-9) or c == d or _has(locked_keys, min(a, b) * nv + max(a, b)):
                 continue
-            if (c * nv + d) in where or (d * nv + c) in where or _has(fixed_keys, min(c, d) * nv + max(c, d)):
-                continue
-            if _folds(p, a, b, c, d, n_old):
+            if index:
+                exists = (c * nv + d) in where or (d * nv + c) in where
+            else:
+                exists = _has(skey, c * nv + d) or _has(skey, d * nv + c)
+            if exists or _has(fixed_keys, min(c, d) * nv + max(c, d)) or _folds(p, a, b, c, d, n_old):
                 continue
             h1[nc], h2[nc], score[nc], cc[nc], dd[nc] = h1[i], h2[i], s, c, d
             nc += 1
@@ -139,30 +160,37 @@ def flip_passes(p: np.ndarray, f: np.ndarray, fixed_keys: np.ndarray, locked_key
             if ek in made:  # two flips must not create the same edge
                 continue
             made.add(ek)
-            for fc in (f1, f2):  # the six half-edges leave the index ...
-                for k in range(3):
-                    del where[f[fc, k] * nv + f[fc, (k + 1) % 3]]
+            if index:  # the six half-edges leave the index ...
+                for fc in (f1, f2):
+                    for k in range(3):
+                        del where[f[fc, k] * nv + f[fc, (k + 1) % 3]]
             a, b = f[f1, h1[i] % 3], f[f1, (h1[i] % 3 + 1) % 3]
             f[f1, 0], f[f1, 1], f[f1, 2] = c, a, d
             f[f2, 0], f[f2, 1], f[f2, 2] = d, b, c
-            for fc in (f1, f2):  # ... and come back with their new faces, twins both ways
-                for k in range(3):
-                    h = 3 * fc + k
-                    where[f[fc, k] * nv + f[fc, (k + 1) % 3]] = h
-            for fc in (f1, f2):
-                for k in range(3):
-                    h = 3 * fc + k
-                    back = f[fc, (k + 1) % 3] * nv + f[fc, k]
-                    if back in where:
-                        g = where[back]
-                        twin[h] = g
-                        twin[g] = h
-                    else:
-                        twin[h] = -1
+            if index:  # ... and come back with their new faces, twins both ways
+                _reindex(f, f1, f2, nv, where, twin)
             active[f1] = True
             active[f2] = True
             total += 1
     return total
+
+
+@numba.njit(cache=True)
+def _reindex(f: np.ndarray, f1: int, f2: int, nv: int, where, twin: np.ndarray) -> None:
+    """Put the half-edges of faces f1 and f2 (just flipped) back into the index, with their twins."""
+    for fc in (f1, f2):
+        for k in range(3):
+            where[f[fc, k] * nv + f[fc, (k + 1) % 3]] = 3 * fc + k
+    for fc in (f1, f2):
+        for k in range(3):
+            h = 3 * fc + k
+            back = f[fc, (k + 1) % 3] * nv + f[fc, k]
+            if back in where:
+                g = where[back]
+                twin[h] = g
+                twin[g] = h
+            else:
+                twin[h] = -1
 
 
 @numba.njit(cache=True)
@@ -177,107 +205,6 @@ def _folds(p: np.ndarray, a: int, b: int, c: int, d: int, n_old: np.ndarray) -> 
     n_old[1] = (u2 * w0 - u0 * w2) + (x2 * y0 - x0 * y2)
     n_old[2] = (u0 * w1 - u1 * w0) + (x0 * y1 - x1 * y0)
     return not (_cross_dot(p, c, a, d, n_old) > 0 and _cross_dot(p, d, b, c, n_old) > 0)
-
-
-@numba.njit(cache=True)
-def _flip_passes_sorted(p: np.ndarray, f: np.ndarray, fixed_keys: np.ndarray, locked_keys: np.ndarray,
-                max_passes: int) -> int:
-    """flip_passes with the half-edges sorted again every pass: the same passes, for a patch in
-    which a directed edge repeats (the dict index of flip_passes holds one half-edge per key)."""
-    nv = p.shape[0]
-    nf = f.shape[0]
-    nh = 3 * nf
-    total = 0
-    if nf == 0:
-        return total
-    active = np.ones(nf, dtype=np.bool_)
-    key = np.empty(nh, dtype=np.int64)
-    twin = np.empty(nh, dtype=np.int64)
-    h1 = np.empty(nh, dtype=np.int64)
-    h2 = np.empty(nh, dtype=np.int64)
-    score = np.empty(nh, dtype=np.float64)
-    cc = np.empty(nh, dtype=np.int64)
-    dd = np.empty(nh, dtype=np.int64)
-    n_old = np.empty(3, dtype=np.float64)
-    chosen = np.empty(nf, dtype=np.int64)
-    for _ in range(max_passes):
-        for h in range(nh):
-            a = f[h // 3, h % 3]
-            b = f[h // 3, (h % 3 + 1) % 3]
-            key[h] = a * nv + b
-            twin[h] = b * nv + a
-        order = np.argsort(key, kind="mergesort")
-        skey = key[order]
-        m = 0  # interior edges next to an active face, each once (a < b), in half-edge order
-        for h in range(nh):
-            if f[h // 3, h % 3] >= f[h // 3, (h % 3 + 1) % 3]:
-                continue
-            pos = np.searchsorted(skey, twin[h])
-            if pos >= nh:
-                pos = nh - 1
-            if skey[pos] != twin[h]:
-                continue
-            g = order[pos]
-            if active[h // 3] or active[g // 3]:
-                h1[m] = h
-                h2[m] = g
-                m += 1
-        if m == 0:
-            break
-        nc = 0  # candidates: violating, allowed, not folding
-        for i in range(m):
-            f1, f2 = h1[i] // 3, h2[i] // 3
-            a, b = f[f1, h1[i] % 3], f[f1, (h1[i] % 3 + 1) % 3]
-            c = f[f1, (h1[i] % 3 + 2) % 3]
-            d = f[f2, (h2[i] % 3 + 2) % 3]
-            s = _angle_at(p, c, a, b) + _angle_at(p, d, a, b) - np.pi
-            if not (s > 1e-9) or c == d or _has(locked_keys, min(a, b) * nv + max(a, b)):
-                continue
-            if _has(skey, c * nv + d) or _has(skey, d * nv + c) or _has(fixed_keys, min(c, d) * nv + max(c, d)):
-                continue
-            # no fold: new faces (c, a, d) and (d, b, c) must face like the old pair
-            # n_old = (b - a) x (c - a) + (a - b) x (d - b)
-            u0, u1, u2 = p[b, 0] - p[a, 0], p[b, 1] - p[a, 1], p[b, 2] - p[a, 2]
-            w0, w1, w2 = p[c, 0] - p[a, 0], p[c, 1] - p[a, 1], p[c, 2] - p[a, 2]
-            x0, x1, x2 = p[a, 0] - p[b, 0], p[a, 1] - p[b, 1], p[a, 2] - p[b, 2]
-            y0, y1, y2 = p[d, 0] - p[b, 0], p[d, 1] - p[b, 1], p[d, 2] - p[b, 2]
-            n_old[0] = (u1 * w2 - u2 * w1) + (x1 * y2 - x2 * y1)
-            n_old[1] = (u2 * w0 - u0 * w2) + (x2 * y0 - x0 * y2)
-            n_old[2] = (u0 * w1 - u1 * w0) + (x0 * y1 - x1 * y0)
-            if not (_cross_dot(p, c, a, d, n_old) > 0 and _cross_dot(p, d, b, c, n_old) > 0):
-                continue
-            h1[nc], h2[nc], score[nc], cc[nc], dd[nc] = h1[i], h2[i], s, c, d
-            nc += 1
-        if nc == 0:
-            break
-        # independent set: each face picks its most violating candidate edge (stable: ties by order)
-        rank = np.argsort(-score[:nc], kind="mergesort")
-        chosen[:] = -1
-        for r in range(nc):
-            i = rank[r]
-            for face in (h1[i] // 3, h2[i] // 3):
-                if chosen[face] < 0:
-                    chosen[face] = i
-        made = set()
-        made.add(-1)
-        active[:] = False
-        for r in range(nc):
-            i = rank[r]
-            f1, f2 = h1[i] // 3, h2[i] // 3
-            if chosen[f1] != i or chosen[f2] != i:
-                continue
-            c, d = cc[i], dd[i]
-            ek = min(c, d) * nv + max(c, d)
-            if ek in made:  # two flips must not create the same edge
-                continue
-            made.add(ek)
-            a, b = f[f1, h1[i] % 3], f[f1, (h1[i] % 3 + 1) % 3]
-            f[f1, 0], f[f1, 1], f[f1, 2] = c, a, d
-            f[f2, 0], f[f2, 1], f[f2, 2] = d, b, c
-            active[f1] = True
-            active[f2] = True
-            total += 1
-    return total
 
 
 @numba.njit(cache=True)
