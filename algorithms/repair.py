@@ -984,6 +984,7 @@ def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]
     return int(A[i]), int(B[j]), q
 
 
+SIDE_REACH = 0.25  # _fair_sides: a side's fairing stays within this fraction of its border's diameter
 FLAT_HOLE = 1e-3  # a hole border within this fraction of its diameter of one plane is flat (_continue_creases)
 IN_PLANE = float(np.cos(np.radians(2.0)))  # a face within 2 degrees of a flat hole's plane lies in it (_flat_fills)
 
@@ -1262,7 +1263,16 @@ def _fair_sides(V: NDArray[np.float64], F: NDArray[np.int64], n_before: int, n_i
     of its system and the chain vertices are ``bare`` (their Laplacian would read the other side),
     so no side rounds the crease off and every split chain beside a crease is faired with its
     side instead of staying where its force line put it (featuretype: a split chain's straight
-    midpoint hung 2.3 % of the diagonal off the part)."""
+    midpoint hung 2.3 % of the diagonal off the part).
+
+    **(choice)** A side's fairing is kept when its free vertices stay within ``SIDE_REACH`` (a
+    quarter) of the side's border diameter of the border's box, else the next system is tried, else
+    the side keeps its darned fill. Judged against the box of the free vertices themselves (as
+    before), a side of one free vertex had a box of size 0 and no system that moved it at all was
+    kept; judged against the border within one diameter, a cut of trimesh's annulus (10:0) took a
+    fairing 12 % of the diagonal off (2.3 % kept darned). Sweep (920 runs) against the old guard:
+    17 runs changed, box 8:0 1.53 -> 0.62 % (MeshLib 2.78 %), featuretype 5:1 light 1.99 -> 2.23 %,
+    4:0 light 1.53 -> 1.69 %, topology unchanged."""
     from .darning import plausible
     from .darning.fair import fair
 
@@ -1281,12 +1291,15 @@ def _fair_sides(V: NDArray[np.float64], F: NDArray[np.int64], n_before: int, n_i
             near[sys_f[near[sys_f].any(axis=1)].ravel()] = True
         sys_f = sys_f[near[sys_f].any(axis=1)]
         bare = np.intersect1d(np.unique(faces), crease)
+        # judged against the side's border (the vertices of the faces touching its free vertices),
+        # within a quarter of its diameter
+        border = V[np.unique(sys_f[np.isin(sys_f, free).any(axis=1)])]
         for op, w in ((operator, "cotan"), ("U2", "cotan"), ("U2", "uniform"), ("U1", "uniform")):
             try:
                 got = fair(out, sys_f, free, operator=op, weights=w, bare=bare)
             except (RuntimeError, ValueError, np.linalg.LinAlgError):
                 continue
-            if plausible(got[free], V[free]):
+            if plausible(got[free], border, reach=SIDE_REACH):
                 out[free] = got[free]
                 used = f"{op} {w} by crease sides"
                 break
