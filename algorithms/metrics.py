@@ -57,14 +57,14 @@ def forced_faces(vertices: NDArray[np.float64], patch: NDArray[np.int64], border
     def keys(x: NDArray[np.int64]) -> NDArray[np.int64]:
         return np.unique(np.sort(x, axis=1) @ np.array([nv, 1])) if len(x) else np.zeros(0, np.int64)
 
-    kb, kc = keys(e), keys(c)
+    border, crease = keys(e), keys(c)
     ang = triangle_angles(vertices, f)
     k = np.argmin(ang, axis=1)
     r = np.arange(len(f))
     x, a, b = f[r, k], f[r, (k + 1) % 3], f[r, (k + 2) % 3]
-    ka, kb_ = np.minimum(x, a) * nv + np.maximum(x, a), np.minimum(x, b) * nv + np.maximum(x, b)
-    ba, bb = np.isin(ka, kb), np.isin(kb_, kb)
-    on = (ba & bb) | (ba & np.isin(kb_, kc)) | (bb & np.isin(ka, kc))
+    xa, xb = np.minimum(x, a) * nv + np.maximum(x, a), np.minimum(x, b) * nv + np.maximum(x, b)  # its two edges
+    ba, bb = np.isin(xa, border), np.isin(xb, border)
+    on = (ba & bb) | (ba & np.isin(xb, crease)) | (bb & np.isin(xa, crease))
     return on & (ang[r, k] < below)
 
 

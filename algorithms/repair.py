@@ -830,13 +830,12 @@ class _Incidence:
     directly), so a hole's neighbourhood costs the size of the neighbourhood, not of the surface."""
 
     def __init__(self, faces: NDArray[np.int64], n_vertices: int) -> None:
+        from .topology import VertexFaces
+
         self.faces = np.asarray(faces, dtype=np.int64)
         # the table: the faces at vertex v are face_of[start[v]:start[v + 1]] (ascending)
-        flat = self.faces.ravel()
-        order = np.argsort(flat, kind="stable")
-        self.face_of = order // 3
-        self.start = np.zeros(n_vertices + 1, dtype=np.int64)
-        np.cumsum(np.bincount(flat, minlength=n_vertices), out=self.start[1:])
+        table = VertexFaces(self.faces, n_vertices)
+        self.face_of, self.start = table.face_of, table.start
         self.added: list[NDArray[np.int64]] = []
 
     def neighbourhood(self, V: NDArray[np.float64], poly: tuple[int, ...], *,

@@ -34,6 +34,21 @@ class EdgeTable:
     counts: NDArray[np.int64]
 
 
+class VertexFaces:
+    """The faces at each vertex, from one stable sort of the face corners: the faces at vertex v are
+    ``face_of[start[v]:start[v + 1]]``, ascending (a face with v twice is listed twice)."""
+
+    def __init__(self, faces: NDArray[np.int64], n_vertices: int) -> None:
+        flat = np.asarray(faces, dtype=np.int64).ravel()
+        self.face_of = np.argsort(flat, kind="stable") // 3
+        self.start = np.zeros(n_vertices + 1, dtype=np.int64)
+        np.cumsum(np.bincount(flat, minlength=n_vertices), out=self.start[1:])
+
+    def rows(self, v: int) -> NDArray[np.int64]:
+        """The faces at vertex ``v``, each once, ascending."""
+        return np.unique(self.face_of[self.start[v]:self.start[v + 1]])
+
+
 def edge_table(faces: NDArray[np.int64]) -> EdgeTable:
     he = halfedges(faces)
     if not len(he):

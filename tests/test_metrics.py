@@ -75,3 +75,17 @@ def test_normal_deviation_and_uniformity():
     s = icosphere(3)
     assert edge_length_cv(s.vertices, s.faces) < 0.15
     assert min_angles(s.vertices, s.faces).min() > 45
+
+
+def test_vertex_faces_lists_the_faces_at_each_vertex():
+    """topology.VertexFaces (the table the repair's neighbourhoods and the refinement's collapses
+    read) against a scan of every face, on random faces with repeated and unused vertices."""
+    from algorithms.topology import VertexFaces
+
+    rng = np.random.default_rng(5)
+    f = rng.integers(0, 30, size=(80, 3))
+    f[3] = (7, 7, 9)  # a vertex twice in one face: listed once by rows()
+    table = VertexFaces(f, 35)
+    for v in range(35):
+        assert table.rows(v).tolist() == np.flatnonzero((f == v).any(axis=1)).tolist()
+    assert table.start[-1] == f.size and table.rows(34).size == 0

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+from numba import types
+from numba.typed import Dict
 
 
 @numba.njit(cache=True)
@@ -66,8 +68,7 @@ def flip_passes(p: np.ndarray, f: np.ndarray, fixed_keys: np.ndarray, locked_key
     total = 0
     if nf == 0:
         return total
-    where = dict()  # directed edge key -> its half-edge (index mode)
-    where[-1] = -1
+    where = Dict.empty(key_type=types.int64, value_type=types.int64)  # directed edge key -> its half-edge
     twin = np.full(nh, -1, dtype=np.int64)  # index mode: the twin half-edge; sorting: the twin key
     if index:
         for h in range(nh):

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..topology import edge_table, face_adjacency, halfedges
+from ..topology import VertexFaces, edge_table, face_adjacency, halfedges
 from .flips import edge_keys_among, flip_passes
 from .refine_kernels import corner_angles as _corner_angles
 from .refine_kernels import grid_search, smooth_bad, unchangeable
@@ -748,10 +748,10 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     hkey = he[:, 0] * len(p) + he[:, 1]
     order = np.argsort(hkey)
     taken = np.zeros(len(f), dtype=bool)
-    new: list[NDArray[np.float64]] = []
     faces = [f]
     grow: list[NDArray[np.int64]] = []
-    # the points accepted this round and their clearance radii (at most one per bad face)
+    # the points inserted this round (vertices nv, nv + 1, ...) and their clearance radii (at most one
+    # per bad face)
     acc, acc_r, n_acc = np.empty((len(bad), 3)), np.empty(len(bad)), 0
 
     def clear_of_accepted(x: NDArray[np.float64]) -> bool:
@@ -775,12 +775,11 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
                         break
         if host >= 0:
             taken[fi] = taken[host] = True
-            m = nv + len(new)
+            m = nv + n_acc
             th = p[f[host]]
             nh = np.cross(th[1] - th[0], th[2] - th[0])
             nh /= max(float(np.linalg.norm(nh)), 1e-300)
             q[i] -= ((q[i] - th[0]) @ nh) * nh  # in the plane of the face it splits
-            new.append(q[i])
             acc[n_acc], acc_r[n_acc] = q[i], 0.5 * float(lab[i])
             n_acc += 1
             i0, i1, i2 = f[host]
@@ -798,8 +797,7 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
         if taken[g] or mp_enc[i] or not clear_of_accepted(mp):
             continue
         taken[fi] = taken[g] = True
-        m = nv + len(new)
-        new.append(mp)
+        m = nv + n_acc
         acc[n_acc], acc_r[n_acc] = mp, 0.25 * float(el[e])
         n_acc += 1
         c = f[fi, (e + 2) % 3]
@@ -807,9 +805,9 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
         f[fi] = (ea, m, c)
         f[g] = (eb, m, dd)
         grow.append(np.array([[m, eb, c], [m, ea, dd]]))
-    if not new:
+    if not n_acc:
         return np.zeros((0, 3)), f
-    return np.asarray(new), np.vstack(faces + grow)
+    return acc[:n_acc].copy(), np.vstack(faces + grow)
 
 
 def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
@@ -839,8 +837,8 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
     if len(cand):  # the vertices in the diametral lens of a border / locked edge first
         cand = cand[np.argsort(~_encroached(p, np.stack([a, b], axis=1), p[cand]), kind="stable")]
     done = 0
-    fixed_of = _Incidence(fixed, nv)
-    face_of = _Incidence(f, nv)  # rebuilt after each collapse (a move leaves the faces as they are)
+    fixed_of = VertexFaces(fixed, nv)
+    face_of = VertexFaces(f, nv)  # rebuilt after each collapse (a move leaves the faces as they are)
     for c in cand:  # sequential: each collapse changes the stars of the next candidates
         rows = face_of.rows(int(c))
         if not len(rows):
@@ -885,22 +883,9 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
         f = f.copy()
         f[rows[~both]] = nf
         f = np.delete(f, rows[both], axis=0)
-        face_of = _Incidence(f, nv)
+        face_of = VertexFaces(f, nv)
         done += 1
     return f, done
-
-
-class _Incidence:
-    """The faces at each vertex (sorted face indices), from one stable sort of the corners."""
-
-    def __init__(self, f: NDArray[np.int64], nv: int) -> None:
-        flat = np.asarray(f, dtype=np.int64).reshape(-1)
-        o = np.argsort(flat, kind="stable")
-        self.order = o // 3
-        self.start = np.searchsorted(flat[o], np.arange(nv + 1))
-
-    def rows(self, v: int) -> NDArray[np.int64]:
-        return np.unique(self.order[self.start[v]:self.start[v + 1]])
 
 
 def _cross(u: NDArray[np.float64], w: NDArray[np.float64]) -> NDArray[np.float64]:
