@@ -103,6 +103,28 @@ def _frep(name: str) -> Mesh:
     return triangulate_object(demo_object(name), FrepParams(qlev=6)).mesh
 
 
+def _tube(cx: float, major: float = 0.45, minor: float = 0.17) -> str:
+    return f"({minor}**2 - (sqrt((x-{cx})**2 + y**2) - {major})**2 - z**2)"
+
+
+# F-rep objects of genus 2 and 3 (text, bounds), triangulated like the demo objects: handles side
+# by side, and a thin tube round a figure eight (the lemniscate (x^2 + y^2)^2 = x^2 - y^2), whose
+# cuts often take a whole piece of the tube
+FREP_EXTRA = {
+    "dtorus": (f"r_or({_tube(-0.42)}, {_tube(0.42)})", ((-1.1, -0.7, -0.3), (1.1, 0.7, 0.3))),
+    "ttorus": (f"r_or(r_or({_tube(-0.84)}, {_tube(0.0)}), {_tube(0.84)})", ((-1.5, -0.7, -0.3), (1.5, 0.7, 0.3))),
+    "lemni": ("0.012 - ((x**2 + y**2)**2 - x**2 + y**2)**2 - z**2", ((-1.2, -0.6, -0.2), (1.2, 0.6, 0.2))),
+}
+
+
+def _frep_extra(name: str) -> Mesh:
+    from algorithms.frep.objects import from_expression
+    from algorithms.frep.pipeline import FrepParams, triangulate_object
+
+    text, bounds = FREP_EXTRA[name]
+    return triangulate_object(from_expression(text, name=name, bounds=bounds), FrepParams(qlev=6)).mesh
+
+
 # name -> (loader, genus)
 MODELS = {
     "ellipsoid": (lambda: gen.ellipsoid((1.4, 1.0, 0.7), subdivisions=5), 0),
@@ -116,6 +138,8 @@ MODELS = {
     "bunny": (lambda: load("bunny_closed.ply"), 0),
     **{f"frep-{name}": (functools.partial(_frep, name), genus)
        for name, genus in (("blob", 0), ("perturbed", 0), ("boxsphere", 0), ("torus", 1))},
+    **{f"frep-{name}": (functools.partial(_frep_extra, name), genus)
+       for name, genus in (("dtorus", 2), ("ttorus", 3), ("lemni", 2))},
 }
 
 
