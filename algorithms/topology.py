@@ -6,6 +6,8 @@ is sequential by nature. Half-edges of face (a, b, c) are a->b, b->c, c->a.
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Literal, overload
 
@@ -49,7 +51,33 @@ class VertexFaces:
         return np.unique(self.face_of[self.start[v]:self.start[v + 1]])
 
 
+_EDGE_CACHE: OrderedDict[tuple, EdgeTable] = OrderedDict()
+_EDGE_CACHE_SIZE = 8
+_EDGE_CACHE_MIN = 3000  # faces: smaller arrays are cheaper to table than to hash
+
+
 def edge_table(faces: NDArray[np.int64]) -> EdgeTable:
+    """The undirected edges of ``faces``. The tables of the last few large face arrays are kept
+    (read-only), keyed by the arrays' contents: the repair asks for the edges of the same input
+    mesh about fifteen times (bunny-many-holes: 53,000 faces, 17 ms each)."""
+    f = np.ascontiguousarray(faces, dtype=np.int64)
+    if len(f) < _EDGE_CACHE_MIN:
+        return _edge_table(f)
+    key = (f.shape, hashlib.blake2b(f.data, digest_size=16).digest())
+    hit = _EDGE_CACHE.get(key)
+    if hit is not None:
+        _EDGE_CACHE.move_to_end(key)
+        return hit
+    et = _edge_table(f)
+    for a in (et.edges, et.halfedge_edge, et.counts):
+        a.flags.writeable = False
+    _EDGE_CACHE[key] = et
+    if len(_EDGE_CACHE) > _EDGE_CACHE_SIZE:
+        _EDGE_CACHE.popitem(last=False)
+    return et
+
+
+def _edge_table(faces: NDArray[np.int64]) -> EdgeTable:
     he = halfedges(faces)
     if not len(he):
         z = np.zeros((0, 2), dtype=np.int64)
