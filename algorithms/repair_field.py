@@ -168,7 +168,7 @@ def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RI
     the two rims of a tube cut across, each open towards the other: both rims (``rim_axis``:
     mean |n . N| < ``rim``) and facing (the mean of b . u over a loop's points, with b its outward
     vectors (spec §2) and u the unit vector from its centroid to the other's, above ``facing``,
-    both ways).
+    both ways), with no other loop of ``frames`` in the gap between them (``_between``).
 
     **(choice)** Lines across such a rim's own hole do not count against the lines between the
     two (``tunnel_pairs``): across a rim they meet the tube's wall square on, a cap with a crease
@@ -192,9 +192,27 @@ def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RI
             if d <= 0:
                 continue
             u = u / d
-            if float((frames[a].outward @ u).mean()) > facing and float((frames[b].outward @ -u).mean()) > facing:
+            if float((frames[a].outward @ u).mean()) > facing and float((frames[b].outward @ -u).mean()) > facing \
+                    and not _between(frames, geo, a, b):
                 out.add((min(a, b), max(a, b)))
     return out
+
+
+def _between(frames: list[LoopFrame], geo: dict, a: int, b: int) -> bool:
+    """Whether another loop lies in the gap between loops a and b: its centroid projects onto the
+    segment between theirs, within the larger of their mean radii of it (the two rims of a band of
+    the same tube, between the rims of two pieces that face each other across it)."""
+    ca, cb = geo[a][0], geo[b][0]
+    d = cb - ca
+    reach = max(loop_radius(frames[a]), loop_radius(frames[b]))
+    for k, fr in enumerate(frames):
+        if k in (a, b):
+            continue
+        c = fr.points.mean(axis=0)
+        t = float((c - ca) @ d) / float(d @ d)
+        if 0.0 < t < 1.0 and float(np.linalg.norm(c - ca - t * d)) < reach:
+            return True
+    return False
 
 
 def tunnel_pairs(from_loop: dict[int, list[tuple[int, ForceLine]]], loop_ids: list[int], *,
