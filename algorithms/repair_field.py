@@ -173,13 +173,13 @@ def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RI
     **(choice)** Lines across such a rim's own hole do not count against the lines between the
     two (``tunnel_pairs``): across a rim they meet the tube's wall square on, a cap with a crease
     all round, where the lines between the rims continue it. A thin tube cut by a ball wider
-    than the tube lost its handle (the lemniscate tube of bench/sweep.py's frep-lemni: 4 of 20
+    than the tube lost its handle (the lemniscate tube of bench/sweep.py's frep-lemni: 4 of its first 12
     cuts, genus 1 instead of 2) because its caps were shorter than the gap. Measured on every
-    pair of loops of one island in the sweep's cuts (26 models, both modes): 14 pairs pass the
-    test, all of them two rims of one removed region (one region touches both). Of two islands
-    (``same_island=False``; step 1 joins them along the tube across a long gap): 87 pairs, all two
-    rims of one removed region (none across a long gap in the sweep's cuts; the tests cut a thin
-    torus into two).
+    pair of loops of one island in the sweep's 520 cuts (26 models): 7 pairs pass the test (6
+    across a long gap), all of them two rims of one removed region (one region touches both). Of
+    two islands (``same_island=False``; step 1 joins them along the tube across a long gap): 85
+    pairs, all two rims of one removed region (none across a long gap in the sweep's cuts; the
+    tests cut a thin torus into two).
     """
     geo = {k: rim_axis(frames[k]) for k in loop_ids}
     out: set[tuple[int, int]] = set()
