@@ -29,6 +29,7 @@ from .field.indicator import IndicatorField, sources_from_frames, top_normal
 from .field.protocol import Biaf
 from .field.shielding import mesh_bvh
 from .force_lines import make_targets, trace
+from .holes import best_fit_plane
 from .mesh import Icadm
 from .params import FieldParams
 from .records import Cancelled, ForceLine
@@ -157,8 +158,7 @@ def rim_axis(frame: LoopFrame) -> tuple[NDArray[np.float64], NDArray[np.float64]
     surface lies about in the loop's plane) and near 0 for the rim of a tube cut across (the
     tube's wall stands on the plane of the cut).
     """
-    c = frame.points.mean(axis=0)
-    N = np.linalg.svd(frame.points - c, full_matrices=False)[2][-1]
+    c, N = best_fit_plane(frame.points)
     return c, N, float(np.abs(frame.normal @ N).mean())
 
 
