@@ -319,10 +319,14 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             out.append((Bridge(a, b, pts, float(ln.quality), kind, line_index.get(id(ln), -1)), ln))
         return out
 
-    def keep(b: Bridge, ln: ForceLine | None) -> None:
+    def keep(b: Bridge, ln: ForceLine | None, *, hold: bool = False) -> None:
+        """Keep bridge ``b`` (from line ``ln``, None for a constructed one); ``hold``: the fairing keeps
+        its chain where it is (a bridge along a tube between facing rims, _rim_bridges)."""
         state.add(b)
         bridges.append(b)
         chains.append(work.add_vertices(b.points, _chain_normals(ln, b.points)))
+        if hold:
+            held_chains.append(chains[-1])
 
     # 1. connect islands (ICM3 -> ICM2): conflicts resolved best quality first
     t0 = time.perf_counter()
@@ -368,11 +372,11 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             for br in _rim_bridges(work.V(), frames[a], frames[b], lc_used, params.field.ki, spacing, boundary,
                                    rules.along, kind="island"):
                 if state.conflict(br, neighbourhood=0.0, near_ends=False) is None:
-                    keep(br, None)
+                    keep(br, None, hold=True)
                     guard.add(br)
-                    held_chains.append(chains[-1])
                     joined.add((a, b))
-            notes.append(f"loops {a} and {b}: facing rims of a tube across islands, joined along it")
+            notes.append(f"loops {a} and {b}: facing rims of a tube across islands, "
+                         f"{'joined along it' if (a, b) in joined else 'no bridge along it fits'}")
         for b, ln in cands:
             n_arrived += 1
             pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
@@ -488,9 +492,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                             kept_pair.append((b, None))
                 if len(kept_pair) >= 2:
                     for b, ln in kept_pair:
-                        keep(b, ln)
-                        if ln is None:  # a bridge along a tube between facing rims: the fairing keeps it
-                            held_chains.append(chains[-1])
+                        keep(b, ln, hold=ln is None)  # no line: a bridge along a tube between facing rims
                 else:
                     rejected += [(b.candidate, f"tunnel between loops {pair} left with one bridge")
                                  for b, _ in kept_pair]
@@ -1363,8 +1365,9 @@ def _fair_sides(V: NDArray[np.float64], F: NDArray[np.int64], n_before: int, n_i
     midpoint hung 2.3 % of the diagonal off the part).
 
     **(choice)** A side's fairing is kept when its free vertices stay within ``SIDE_REACH`` (a
-    quarter) of the side's border diameter of the border's box, else the next system is tried, else
-    the side keeps its darned fill. Judged against the box of the free vertices themselves (as
+    quarter) of the diameter of the side's border (the vertices of the faces around its free
+    vertices) from that border's box, else the next system is tried, else the side keeps its
+    darned fill. Judged against the box of the free vertices themselves (as
     before), a side of one free vertex had a box of size 0 and no system that moved it at all was
     kept; judged against the border within one diameter, a cut of trimesh's annulus (10:0) took a
     fairing 12 % of the diagonal off (2.3 % kept darned). Sweep (920 runs) against the old guard:

@@ -182,10 +182,11 @@ def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RI
     tests cut a thin torus into two).
     """
     geo = {k: rim_axis(frames[k]) for k in loop_ids}
+    steep = [k for k in loop_ids if geo[k][2] < rim]  # the pairs among these only
     out: set[tuple[int, int]] = set()
-    for i, a in enumerate(loop_ids):
-        for b in loop_ids[i + 1:]:
-            if (frames[a].island == frames[b].island) != same_island or geo[a][2] >= rim or geo[b][2] >= rim:
+    for i, a in enumerate(steep):
+        for b in steep[i + 1:]:
+            if (frames[a].island == frames[b].island) != same_island:
                 continue
             u = geo[b][0] - geo[a][0]
             d = float(np.linalg.norm(u))

@@ -7,6 +7,7 @@ is sequential by nature. Half-edges of face (a, b, c) are a->b, b->c, c->a.
 from __future__ import annotations
 
 import hashlib
+import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Literal, overload
@@ -52,6 +53,7 @@ class VertexFaces:
 
 
 _EDGE_CACHE: OrderedDict[tuple, EdgeTable] = OrderedDict()
+_EDGE_CACHE_LOCK = threading.Lock()  # the explorer repairs in a worker thread while the GUI asks too
 _EDGE_CACHE_SIZE = 8
 _EDGE_CACHE_MIN = 3000  # faces: smaller arrays are cheaper to table than to hash
 
@@ -64,16 +66,18 @@ def edge_table(faces: NDArray[np.int64]) -> EdgeTable:
     if len(f) < _EDGE_CACHE_MIN:
         return _edge_table(f)
     key = (f.shape, hashlib.blake2b(f.data, digest_size=16).digest())
-    hit = _EDGE_CACHE.get(key)
-    if hit is not None:
-        _EDGE_CACHE.move_to_end(key)
-        return hit
+    with _EDGE_CACHE_LOCK:
+        hit = _EDGE_CACHE.get(key)
+        if hit is not None:
+            _EDGE_CACHE.move_to_end(key)
+            return hit
     et = _edge_table(f)
     for a in (et.edges, et.halfedge_edge, et.counts):
         a.flags.writeable = False
-    _EDGE_CACHE[key] = et
-    if len(_EDGE_CACHE) > _EDGE_CACHE_SIZE:
-        _EDGE_CACHE.popitem(last=False)
+    with _EDGE_CACHE_LOCK:
+        _EDGE_CACHE[key] = et
+        if len(_EDGE_CACHE) > _EDGE_CACHE_SIZE:
+            _EDGE_CACHE.popitem(last=False)
     return et
 
 

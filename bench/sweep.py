@@ -93,16 +93,6 @@ def _flat_torus() -> Mesh:
     return Mesh(v, m.faces)
 
 
-def _frep(name: str) -> Mesh:
-    """A bundled F-rep demo object triangulated by our F-rep mesher (``bridgefield frep --demo NAME
-    --qlev 6``): smooth shapes no bench case is cut from (boxsphere has creases: a cube and a sphere
-    joined by R-functions)."""
-    from algorithms.frep.objects import demo_object
-    from algorithms.frep.pipeline import FrepParams, triangulate_object
-
-    return triangulate_object(demo_object(name), FrepParams(qlev=6)).mesh
-
-
 def _tube(cx: float, major: float = 0.45, minor: float = 0.17) -> str:
     return f"({minor}**2 - (sqrt((x-{cx})**2 + y**2) - {major})**2 - z**2)"
 
@@ -117,12 +107,19 @@ FREP_EXTRA = {
 }
 
 
-def _frep_extra(name: str) -> Mesh:
-    from algorithms.frep.objects import from_expression
+def _frep(name: str) -> Mesh:
+    """An F-rep object triangulated by our F-rep mesher (``bridgefield frep --demo NAME --qlev 6``):
+    a bundled demo object, or one of ``FREP_EXTRA``. Smooth shapes no bench case is cut from
+    (boxsphere has creases: a cube and a sphere joined by R-functions)."""
+    from algorithms.frep.objects import demo_object, from_expression
     from algorithms.frep.pipeline import FrepParams, triangulate_object
 
-    text, bounds = FREP_EXTRA[name]
-    return triangulate_object(from_expression(text, name=name, bounds=bounds), FrepParams(qlev=6)).mesh
+    if name in FREP_EXTRA:
+        text, bounds = FREP_EXTRA[name]
+        obj = from_expression(text, name=name, bounds=bounds)
+    else:
+        obj = demo_object(name)
+    return triangulate_object(obj, FrepParams(qlev=6)).mesh
 
 
 # name -> (loader, genus)
@@ -137,9 +134,8 @@ MODELS = {
     "torus": (lambda: load("torus.stl"), 1),
     "bunny": (lambda: load("bunny_closed.ply"), 0),
     **{f"frep-{name}": (functools.partial(_frep, name), genus)
-       for name, genus in (("blob", 0), ("perturbed", 0), ("boxsphere", 0), ("torus", 1))},
-    **{f"frep-{name}": (functools.partial(_frep_extra, name), genus)
-       for name, genus in (("dtorus", 2), ("ttorus", 3), ("lemni", 2))},
+       for name, genus in (("blob", 0), ("perturbed", 0), ("boxsphere", 0), ("torus", 1),
+                           ("dtorus", 2), ("ttorus", 3), ("lemni", 2))},
 }
 
 

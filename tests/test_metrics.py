@@ -89,3 +89,25 @@ def test_vertex_faces_lists_the_faces_at_each_vertex():
     for v in range(35):
         assert table.rows(v).tolist() == np.flatnonzero((f == v).any(axis=1)).tolist()
     assert table.start[-1] == f.size and table.rows(34).size == 0
+
+
+def test_edge_table_of_a_large_array_is_kept_read_only_and_keyed_by_contents():
+    """topology.edge_table keeps the tables of the last large face arrays: a copy of the same faces
+    gets the same table, a changed array its own; the kept arrays cannot be written; small arrays
+    are tabled every time."""
+    from algorithms.topology import _EDGE_CACHE_MIN, _edge_table, edge_table
+
+    s = icosphere(5)  # 20,480 faces
+    f = np.asarray(s.faces, dtype=np.int64)
+    assert len(f) >= _EDGE_CACHE_MIN
+    et = edge_table(f)
+    assert edge_table(f.copy()) is et
+    ref = _edge_table(f)
+    for a, b in zip((et.edges, et.halfedge_edge, et.counts), (ref.edges, ref.halfedge_edge, ref.counts)):
+        np.testing.assert_array_equal(a, b)
+        assert not a.flags.writeable
+    g = f.copy()
+    g[0] = g[0, ::-1]
+    assert edge_table(g) is not et
+    small = f[:100]
+    assert edge_table(small) is not edge_table(small) and edge_table(small).counts.flags.writeable
