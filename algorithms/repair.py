@@ -619,11 +619,14 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
                 if np.linalg.norm(V[list(poly)] - pts[0], axis=1).min() <= 1e-9 * spacing:
                     pts = pts[:0]  # an earlier split already put its vertex there: no second copy
-        if not len(pts) and _is_edge(work.F(), poly[i], poly[j], model.vertex_origin):
+        if not len(pts) and (_is_edge(work.F(), poly[i], poly[j], model.vertex_origin) or
+                             _bare_bridge(bridges, poly[i], poly[j], model.vertex_origin)):
             # a bare chord that is an edge already (featuretype cut by a slab: the border edge of a
             # two-face island between its two bridges) would be non-manifold: one vertex midway.
             # Between copies too: once the copies are merged it is that edge (featuretype cut by
-            # balls and a slab: a chord from a vertex to a copy of its neighbour, four faces)
+            # balls and a slab: a chord from a vertex to a copy of its neighbour, four faces).
+            # So would a second bare chord between the two ends of an earlier one (annulus sweep cut
+            # 4:0: two splits of one sliver row both chose the same pair, an edge of four faces)
             pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
         b = Bridge(int(poly[i]), int(poly[j]), pts, q, kind, len(lines) - 1 if line is not None else -1)
         chain_normals = (_chain_normals(line, pts) if line is not None
@@ -1233,6 +1236,16 @@ def _edge_faces(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] 
         F = np.where(F < n, origin[np.minimum(F, n - 1)], F)
         a, b = (int(origin[v]) if v < n else v for v in (a, b))
     return int(((F == a).any(axis=1) & (F == b).any(axis=1)).sum())
+
+
+def _bare_bridge(bridges: list[Bridge], a: int, b: int, origin: NDArray[np.int64] | None = None) -> bool:
+    """Whether a kept bridge without chain vertices already joins a and b (or copies of them): its
+    chord is an edge of the output before any face has it."""
+    def key(v: int) -> int:
+        return int(origin[v]) if origin is not None and v < len(origin) else int(v)
+
+    want = {key(a), key(b)}
+    return any(not len(br.points) and {key(br.start), key(br.end)} == want for br in bridges)
 
 
 def _is_edge(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None = None) -> bool:

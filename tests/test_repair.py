@@ -273,6 +273,33 @@ def test_sector_prefers_the_narrowest_gap_that_holds_the_fragment():
     assert _sector(V, N, polys, [(0, 0), (1, 0)], V[5]) == (1, 0, 1)
 
 
+def test_sector_of_a_fragment_standing_across_a_sharp_edge():
+    """The corner of the trimesh annulus cut 4:0 (coordinates of the cut, to 4 digits): m on the rim
+    of the bottom ring (normal -z), whose kept border there is the tip of a radial sliver (4223, m,
+    4234); a fragment of the inner wall (4220, 4259, m) already walked in; a second one (m, 4298,
+    4267) to place. The walks pass m twice: from 4223 to 4220 (the gap on the ring) and from 4259,
+    straight above m, to 4234 (up the wall, along the rim and back on the ring): the second holds
+    the new fragment. On the ring's tangent plane 4259's direction vanishes and the first pass was
+    taken; across the bisector of the ring's and the fragment's normals both are seen."""
+    from algorithms.fragments import _sector
+
+    P = {"m": [-0.3967, -0.3044, -0.3], 4223: [-0.5469, -0.395, -0.3], 4234: [-0.5355, -0.4109, -0.3],
+         4220: [-0.4014, -0.2977, -0.3], 4259: [-0.3967, -0.3044, -0.15], 4298: [-0.3915, -0.3107, -0.15],
+         4267: [-0.3915, -0.3107, -0.3]}
+    ix = {k: i for i, k in enumerate(P)}
+    V = np.array(list(P.values()), float)
+    N = np.tile([0.0, 0.0, -1.0], (len(V), 1))
+    polys = [(ix[4223], ix["m"], ix[4220], 90), (ix[4259], ix["m"], ix[4234], 91)]
+    toward = V[[ix[4298], ix[4267]]].mean(axis=0)
+    fn = np.cross(V[ix[4298]] - V[ix["m"]], V[ix[4267]] - V[ix["m"]])
+    spots = [(0, ix["m"]), (1, ix["m"])]
+    assert _sector(V, N, polys, spots, toward, fragment_normal=fn) == (1, ix["m"], 1)
+    assert _sector(V, N, polys, spots, toward) == (0, ix["m"], 1)  # the tangent plane alone: the ring's pass
+    # a fragment lying in the tangent plane, either winding, is placed as in the tangent plane
+    for flat in ([0.0, 0.0, 1.0], [0.0, 0.0, -1.0]):
+        assert _sector(V, N, polys, spots, toward, fragment_normal=np.array(flat)) == (0, ix["m"], 1)
+
+
 @pytest.mark.parametrize("sign", [1.0, -1.0])
 def test_fragment_at_a_vertex_the_walk_passes_twice(sign):
     """The walk passes the fragment's vertex twice (each copy of it turns around one end of the

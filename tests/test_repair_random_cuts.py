@@ -551,3 +551,27 @@ def test_a_band_whose_rims_touch_is_split_beside_itself_not_across_the_pinch():
     res = closed_repair(model, 0)
     off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
     assert off < 0.01  # 0.27 %
+
+
+def test_fragments_standing_on_a_rim_join_the_gap_they_stand_in():
+    """trimesh annulus cut 4:0 (four balls and a slab): a row of one-face fragments of the inner
+    wall stands on the rim of the bottom ring, whose kept border is a sawtooth of radial slivers.
+    The walks pass each rim vertex twice, and one of them arrives from the wall vertex straight
+    above it: projected on the ring's tangent plane its direction vanished, the fragment joined
+    the wrong pass (fragments._sector), and the output had two pinched vertices and genus 7. Then
+    two splits of one sliver row chose the same pair of vertices: a second bare chord between the
+    ends of an earlier one, an edge of four faces (repair._bare_bridge). Now closed, manifold,
+    genus 1 in light mode, every input face kept; full mode is closed and manifold too."""
+    model = annulus_cut([(2204, 0.18643152622075815), (4485, 0.1367235661212496), (4670, 0.139358759821132),
+                         (5651, 0.295550981874801)],
+                        ([1.0024269805867294, 0.7146943411145676, -0.5935466183426229], -0.3862205516363897,
+                         0.07509267813482785), 0, 4)
+    assert sum(s.reason.startswith("fragment") for s in model.set_aside) == 20
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_closed_manifold(res, genus=1)
+    assert topology(res.mesh.faces).manifold_vertices
+    assert_input_kept(model, res.mesh, fragments=True)
+    full = repair(model, RepairParams(field=FieldParams(mode="full")))
+    assert_closed_manifold(full)
+    assert topology(full.mesh.faces).manifold_vertices
+    assert_input_kept(model, full.mesh, fragments=True)
