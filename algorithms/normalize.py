@@ -162,7 +162,7 @@ def _split_fans(f: NDArray[np.int64], alive: NDArray[np.bool_], links: NDArray[n
 
     out = f.copy()
     nf = len(f)
-    if not nf:
+    if not nf or not alive.any():  # nothing to split (every face set aside: a file of degenerate faces)
         return out, np.arange(nv, dtype=np.int64)
     corner = np.arange(3 * nf).reshape(nf, 3)
     rows, cols = [], []

@@ -252,6 +252,11 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             progress(frac, msg)
 
     mesh = model.mesh
+    if not mesh.n_faces:  # nothing to keep, nothing to bridge: not a closed surface of no faces
+        from .normalize import set_aside_summary
+
+        why = ", ".join(f"{n} {k}" for k, n in set_aside_summary(model).items())
+        raise ValueError("no face to repair: " + (f"every face was set aside ({why})" if why else "the model has none"))
     summary = summarize(model, charge=params.field.charge)
     frames = list(summary.loops)  # loop_frames(mesh, charge), walked once
     loops = [f.vertices for f in frames]

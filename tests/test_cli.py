@@ -52,6 +52,21 @@ def test_errors_are_one_line_exit_2(capsys, argv, msg):
     assert msg in err and "\n" not in err and "Traceback" not in err
 
 
+def test_a_file_of_degenerate_faces_is_an_error_and_writes_nothing(tmp_path, capsys):
+    """Every face set aside (a zero-area triangle: three collinear vertices): normalisation keeps
+    none (it used to fail inside the fan splitting with an IndexError), and the repair says why
+    instead of writing an empty mesh as a "closed" surface."""
+    bad = tmp_path / "flat.obj"
+    bad.write_text("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n")
+    out = tmp_path / "out.ply"
+    assert main(["info", str(bad)]) == 0
+    assert "degenerate: zero area" in capsys.readouterr().out
+    assert main(["repair", str(bad), "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "no face to repair" in err and "1 degenerate: zero area" in err and "\n" not in err
+    assert not out.exists()
+
+
 def test_corrupt_file_through_the_real_command(tmp_path):
     bad = tmp_path / "bad.obj"
     bad.write_text("v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n")
