@@ -563,6 +563,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     locked: list[NDArray[np.int64]] = []  # crease chain edges: never flipped
     # guard: each continuation uses up its crease ends, so there are at most as many as ends
     n_creased, max_creased = 0, (len(ends.directions) + len(ends.planes) if ends is not None else 0)
+    n_apart, apart_budget = 0, 4 * sum(len(p) for p in attached.polygons)  # splits of walks past the depth limit
     while queue:
         step(0.5, f"splitting complex holes ({len(queue)} to check)")
         poly, origin, depth = queue.pop(0)
@@ -583,18 +584,25 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 locked += [np.stack([c[:-1], c[1:]], axis=1) for c in
                            (np.r_[b.start, ids, b.end] for b, ids in zip(new_bridges, chain_ids))]
                 continue
-        if len(set(poly)) != len(poly):
+        disk = len(set(poly)) == len(poly)
+        if not disk:
             verdict = HoleVerdict(False, verdict.reasons + ("not a disk (a vertex is walked twice)",),
                                   verdict.vertices, verdict.flatness, verdict.normal_agreement, verdict.radius)
-        if verdict.simple or depth >= params.max_split_depth or len(poly) < 6:
-            note = "" if verdict.simple else ("split depth limit" if depth >= params.max_split_depth
-                                              else "too small to split")
+        # the depth limit bounds the splits of complex disks; a walk that is not a disk is split until it
+        # is (darned as it is, its repeated vertices and bridges make the output non-manifold): hundreds
+        # of one-face islands joined by a tree of straight bridges are one walk that passes every bridge
+        # twice, cut one pass at a time. Each such split parts two passes of a vertex, so it ends; the
+        # budget is a guard
+        deep = depth >= params.max_split_depth and (disk or n_apart >= apart_budget)
+        n_apart += not disk and depth >= params.max_split_depth
+        if verdict.simple or deep or len(poly) < 6:
+            note = "" if verdict.simple else ("split depth limit" if deep else "too small to split")
             records.append(HoleRecord(poly, verdict, origin, -1, note))
             final.append(poly)
             continue
         any_complex = True
         line = None
-        if len(set(poly)) != len(poly):
+        if not disk:
             # not a disk: join its two sides (the spec adds the next best bridge)
             sb = (fragment_bridge(V, N, poly, attached) or
                   _straight_bridge(V, N, poly, lc_used or spacing * 10, params.field.ki, boundary, rules.along))
