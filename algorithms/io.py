@@ -1,8 +1,10 @@
 """Reading and writing meshes and point clouds.
 
 Meshes are read with trimesh and ``process=False`` so that unreferenced vertices (the free
-points) survive; STL stores every triangle apart, so its vertices are merged. Every failure is
-an :class:`InputError` whose message names the file and what is wrong.
+points) survive. Vertices at exactly the same position are merged (STL stores every triangle apart;
+a PLY or OBJ written as a triangle soup does the same): islands that touch are then seen to touch,
+and normalisation decides what the shared vertex is. Every failure is an :class:`InputError`
+whose message names the file and what is wrong.
 """
 
 from __future__ import annotations
@@ -43,7 +45,7 @@ def _check_readable(path: Path, formats: tuple[str, ...], what: str) -> None:
 
 
 def load_raw(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """Vertices (V, 3) and faces (F, 3) exactly as stored (STL: vertices merged)."""
+    """Vertices (V, 3) and faces (F, 3) as stored, vertices at the same position merged (merge_vertices)."""
     import trimesh
 
     path = Path(path)
@@ -58,8 +60,8 @@ def load_raw(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
         raise InputError(f"{path}: cannot read the {fmt.upper()} file ({type(exc).__name__}: {exc})") from None
     v = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
     f = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
-    if fmt == "stl" and len(v):
-        v, f = merge_vertices(v, f)
+    if len(v):
+        v, f = merge_vertices(v, f, tolerance=1e-9 if fmt == "stl" else None)
     if not len(v):
         raise InputError(f"{path}: the mesh has no vertices")
     if not np.all(np.isfinite(v)):
@@ -71,9 +73,19 @@ def load_raw(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     return v, f
 
 
-def merge_vertices(v: NDArray[np.float64], f: NDArray[np.int64], *, decimals: int = 9) -> tuple[NDArray, NDArray]:
-    """Merge vertices with equal coordinates (rounded), keeping the first occurrence's order."""
-    key = np.round(v, decimals)
+def merge_vertices(v: NDArray[np.float64], f: NDArray[np.int64], *,
+                   tolerance: float | None = None) -> tuple[NDArray, NDArray]:
+    """Merge vertices at the same position, keeping the first occurrence's order: exactly the same
+    (``tolerance`` None), or the same on a grid of ``tolerance`` times the bounding-box diagonal.
+
+    STL files written by CAD tools repeat a corner with its last bits changed (featuretype.stl), so
+    STL is read with a tolerance of 1e-9 of the diagonal; relative, not 9 decimals absolute, with which
+    a model 1e-9 across lost every face to three points."""
+    key = np.asarray(v, dtype=np.float64) + 0.0  # -0.0 and 0.0 are one position
+    if tolerance is not None and len(key):
+        step = tolerance * float(np.linalg.norm(np.ptp(key, axis=0)))
+        if step > 0:
+            key = np.round(key / step) + 0.0
     _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
     order = np.argsort(first)
     rank = np.empty_like(order)

@@ -23,6 +23,35 @@ def test_stl_vertices_are_merged(tmp_path):
     assert len(v) == m.n_vertices and len(f) == m.n_faces
 
 
+def test_a_nanometre_sized_stl_keeps_its_faces(tmp_path):
+    """Merged by exact position, not by coordinates rounded to 9 decimals (the vertices of a model
+    1e-9 across rounded to three points: every face degenerate, nothing left to repair)."""
+    m = disk(segments=12, rings=2)
+    p = save_mesh(type(m)(m.vertices * 1e-9, m.faces), tmp_path / "tiny.stl")
+    v, f = load_raw(p)
+    assert len(v) == m.n_vertices and len(f) == m.n_faces
+    model = load_model(p)
+    assert model.mesh.n_faces == m.n_faces and not model.set_aside
+
+
+@pytest.mark.parametrize("fmt", ["ply", "obj"])
+def test_a_triangle_soup_is_welded(tmp_path, fmt):
+    """A PLY or OBJ with every triangle's corners written apart (a soup) reads as the surface it is:
+    one island, its one border loop, not one island per triangle."""
+    import trimesh
+
+    m = disk(segments=12, rings=2)
+    soup = m.vertices[m.faces].reshape(-1, 3)
+    p = tmp_path / f"soup.{fmt}"
+    trimesh.Trimesh(soup, np.arange(len(soup)).reshape(-1, 3), process=False).export(p)
+    v, f = load_raw(p)
+    assert len(f) == m.n_faces and len(v) == m.n_vertices
+    np.testing.assert_allclose(v[f], m.vertices[m.faces], atol=1e-9)  # the same triangles, corner by corner
+    from algorithms.topology import boundary_loops, islands
+
+    assert islands(f)[0] == 1 and len(boundary_loops(f)) == 1
+
+
 def test_never_overwrites(tmp_path):
     m = disk(segments=8, rings=1)
     p = save_mesh(m, tmp_path / "d.ply")
