@@ -575,3 +575,23 @@ def test_fragments_standing_on_a_rim_join_the_gap_they_stand_in():
     assert_closed_manifold(full)
     assert topology(full.mesh.faces).manifold_vertices
     assert_input_kept(model, full.mesh, fragments=True)
+
+
+def test_a_cap_piece_beside_a_continued_crease_is_filled_in_the_cap_plane():
+    """trimesh's cylinder (subdivided twice) cut 2:1 (two balls): a hole takes part of the bottom cap
+    and the side across the rim. The rim's crease is continued through it, and the cap's piece was
+    faired on its side of the crease and kept still; its border (input vertices and the crease
+    chain) lies in the cap's plane, yet its middle bulged 0.38 % of the diagonal below the cap
+    (MeshLib exact). A piece bounded by kept-still chains and flat is filled in its plane too
+    (repair._flat_fills): every output vertex on or inside the cap's plane, z >= -0.75."""
+    from algorithms.metrics import point_to_surface
+
+    truth = trimesh_model("cylinder-sub")
+    model = random_cut(truth, [(949, 0.14888290972708276), (594, 0.1839975525284251)], None, 0, 2)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_closed_manifold(res, genus=0)
+    assert_input_kept(model, res.mesh)
+    z = res.mesh.vertices[:, 2]
+    assert z.min() >= -0.75 - 1e-9
+    off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
+    assert off < 1e-3
