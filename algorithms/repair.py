@@ -632,8 +632,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 pts = pl[len(pl) // 2 - 1:len(pl) // 2 + 1].mean(axis=0)[None]
                 if np.linalg.norm(V[list(poly)] - pts[0], axis=1).min() <= 1e-9 * spacing:
                     pts = pts[:0]  # an earlier split already put its vertex there: no second copy
-        if not len(pts) and (_is_edge(work.F(), poly[i], poly[j], model.vertex_origin) or
-                             _bare_bridge(bridges, poly[i], poly[j], model.vertex_origin)):
+        if not len(pts) and _is_edge(work.F(), poly[i], poly[j], model.vertex_origin, bridges):
             # a bare chord that is an edge already (featuretype cut by a slab: the border edge of a
             # two-face island between its two bridges) would be non-manifold: one vertex midway.
             # Between copies too: once the copies are merged it is that edge (featuretype cut by
@@ -1245,30 +1244,34 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     return [b1, b2], [other, h1, h2], [ids1, ids2]
 
 
+def _as_input(x: NDArray[np.int64], origin: NDArray[np.int64] | None) -> NDArray[np.int64]:
+    """Vertex ids ``x`` with every model vertex replaced by its input vertex (``origin``; ids past it,
+    the vertices the repair added, stay)."""
+    x = np.asarray(x, dtype=np.int64)
+    if origin is None:
+        return x
+    n = len(origin)
+    return np.where(x < n, origin[np.minimum(x, n - 1)], x)
+
+
 def _edge_faces(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None = None) -> int:
     """How many faces have an edge between a and b or between copies of them (``origin``: each
     model vertex's input vertex)."""
-    if origin is not None:
-        n = len(origin)
-        F = np.where(F < n, origin[np.minimum(F, n - 1)], F)
-        a, b = (int(origin[v]) if v < n else v for v in (a, b))
+    F = _as_input(F, origin)
+    a, b = (int(x) for x in _as_input(np.array([a, b]), origin))
     return int(((F == a).any(axis=1) & (F == b).any(axis=1)).sum())
 
 
-def _bare_bridge(bridges: list[Bridge], a: int, b: int, origin: NDArray[np.int64] | None = None) -> bool:
-    """Whether a kept bridge without chain vertices already joins a and b (or copies of them): its
-    chord is an edge of the output before any face has it."""
-    def key(v: int) -> int:
-        return int(origin[v]) if origin is not None and v < len(origin) else int(v)
-
-    want = {key(a), key(b)}
-    return any(not len(br.points) and {key(br.start), key(br.end)} == want for br in bridges)
-
-
-def _is_edge(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None = None) -> bool:
-    """Whether some face has the edge (a, b); with ``origin`` (each model vertex's input vertex),
-    an edge between copies of a and b counts too."""
-    return _edge_faces(F, a, b, origin) > 0
+def _is_edge(F: NDArray[np.int64], a: int, b: int, origin: NDArray[np.int64] | None = None,
+             bridges: list[Bridge] = ()) -> bool:
+    """Whether the output already has the edge (a, b): some face has it, or a kept bridge without
+    chain vertices is that chord (an edge before any face has it); with ``origin`` (each model
+    vertex's input vertex), an edge between copies of a and b counts too."""
+    if _edge_faces(F, a, b, origin) > 0:
+        return True
+    bare = np.array([(br.start, br.end) for br in bridges if not len(br.points)], dtype=np.int64).reshape(-1, 2)
+    ab = np.sort(_as_input(np.array([a, b]), origin))
+    return bool((np.sort(_as_input(bare, origin), axis=1) == ab).all(axis=1).any())
 
 
 def _sides(polygon: tuple[int, ...]) -> tuple[list[int], list[int]] | None:

@@ -152,6 +152,14 @@ def test_split_chord_between_copies_of_an_edge_gets_a_vertex():
     origin = np.array([0, 1, 2, 1])  # vertex 3 is a copy of 1
     assert not _is_edge(F, 0, 3) and _is_edge(F, 0, 3, origin) and _is_edge(F, 3, 2, origin)
     assert not _is_edge(F, 3, 4, np.array([0, 1, 2, 1, 4]))
+    # a kept bare bridge is an edge before any face has it (annulus sweep cut 4:0), a chained one is not
+    from algorithms.bridge_graph import Bridge
+
+    bare, chained = Bridge(4, 5, np.zeros((0, 3)), 1.0), Bridge(0, 4, np.zeros((1, 3)), 1.0)
+    o6 = np.array([0, 1, 2, 1, 4, 5])
+    assert _is_edge(F, 5, 4, o6, [bare]) and not _is_edge(F, 0, 4, o6, [chained, bare])
+    none = np.zeros((0, 3), dtype=np.int64)  # no face: the bare bridge between copies alone
+    assert _is_edge(none, 1, 2, origin, [Bridge(3, 2, np.zeros((0, 3)), 1.0)]) and not _is_edge(none, 1, 2, origin)
     model, res = balls_and_slab((((2.5, 1.25, 1.0), 0.6862816899052817), ((2.5, -1.25, 1.0), 0.5613853339011625),
                                  ((-2.5, -1.25, 1.0), 0.3540001044674994), ((-2.5, -1.25, 0.0), 0.6905120168834936),
                                  ((-2.5, 1.25, 1.0), 0.32992570011233185)),

@@ -560,7 +560,7 @@ def test_fragments_standing_on_a_rim_join_the_gap_they_stand_in():
     above it: projected on the ring's tangent plane its direction vanished, the fragment joined
     the wrong pass (fragments._sector), and the output had two pinched vertices and genus 7. Then
     two splits of one sliver row chose the same pair of vertices: a second bare chord between the
-    ends of an earlier one, an edge of four faces (repair._bare_bridge). Now closed, manifold,
+    ends of an earlier one, an edge of four faces (repair._is_edge over the bare bridges). Now closed, manifold,
     genus 1 in light mode, every input face kept; full mode is closed and manifold too."""
     model = annulus_cut([(2204, 0.18643152622075815), (4485, 0.1367235661212496), (4670, 0.139358759821132),
                          (5651, 0.295550981874801)],
