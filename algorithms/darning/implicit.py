@@ -182,14 +182,15 @@ def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacin
     return RBFImplicit(c, sol[:m], sol[m:])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _rbf_eval(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.float64],
               a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:  # pragma: no cover
     """f(q) = sum_i w_i |q - c_i|^3 + a0 + a.q and its gradient 3 sum_i w_i |q - c_i| (q - c_i) + a,
-    compiled: a fill's lines are sampled at tens of thousands of points against hundreds of centres."""
+    compiled and parallel over the points (each point's sums in the same order as one thread's): a
+    fill's lines are sampled at tens of thousands of points against hundreds of centres."""
     val = np.empty(len(q))
     grad = np.empty((len(q), 3))
-    for k in range(len(q)):
+    for k in numba.prange(len(q)):
         v = a[0] + a[1] * q[k, 0] + a[2] * q[k, 1] + a[3] * q[k, 2]
         g0, g1, g2 = a[1], a[2], a[3]
         for i in range(len(c)):
