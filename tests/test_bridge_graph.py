@@ -208,3 +208,18 @@ def test_a_bridge_that_crosses_a_boundary_edge_runs_along_it():
     lifted = BoundaryEdges(V2, [np.array([2, 3, 4])])
     assert not lifted.runs_along(Bridge(0, 1, np.zeros((0, 3)), 1.0), V2, 0.005)
     assert lifted.runs_along(Bridge(0, 1, np.zeros((0, 3)), 1.0), V2, 0.02)
+
+
+def test_a_bare_bridge_along_an_edge_inside_a_fragment_is_an_edge_of_the_surface():
+    """A set-aside fragment is put back into the hole it hangs at: a bare bridge along an edge
+    between two of its faces would give that edge four faces (loose triangles of a sphere touching
+    at corners). Its border edges stay open (a bridge there and the fragment's face: the walk
+    decides)."""
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0], [3, 0, 0], [3, 1, 0]], dtype=float)
+    be = BoundaryEdges(v, [np.array([0, 1, 2])], np.array([[0, 1, 2]]),
+                       fragments=[np.array([[3, 5, 4], [5, 6, 4]])])
+    assert be.is_edge(Bridge(4, 5, np.zeros((0, 3)), 1.0))  # inside the fragment
+    assert be.is_edge(Bridge(1, 0, np.zeros((0, 3)), 1.0))  # an edge of the surface
+    assert not be.is_edge(Bridge(3, 4, np.zeros((0, 3)), 1.0))  # the fragment's border
+    assert not be.is_edge(Bridge(1, 3, np.zeros((0, 3)), 1.0))
+    assert not be.is_edge(Bridge(4, 5, np.array([[2.5, 0.5, 0.0]]), 1.0))  # a chain is no edge

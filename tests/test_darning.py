@@ -326,3 +326,18 @@ def test_keep_fitting_keeps_only_a_fill_that_matches_its_border():
     a = darn(m.vertices, m.faces, cap, method="liepa-fair", keep_fitting=True)
     b = darn(m.vertices, m.faces, cap, method="liepa-fair")
     assert len(a.new_vertices) == len(b.new_vertices) > 0
+
+
+@pytest.mark.parametrize("method", ["liepa", "liepa-refine", "liepa-fair"])
+def test_a_hole_whose_every_triangulation_needs_an_existing_edge_is_fanned(method):
+    """A square hole whose two diagonals are edges of the surface already (faces over each of them
+    on the far side): every triangulation of four corners uses one, which would give that edge four
+    faces. The fill is the paper's centroid fan instead, with no chord at all."""
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 0.5, -1], [0.5, 0.5, -2]], dtype=float)
+    around = np.array([[0, 2, 4], [1, 3, 5]])  # the diagonals 0-2 and 1-3 are their edges
+    p = darn(v, around, np.array([0, 1, 2, 3]), method=method)
+    assert len(p.new_vertices) >= 1
+    assert edge_table(np.vstack([around, p.faces])).counts.max() <= 2
+    if method == "liepa":  # the fan itself: one new vertex at the centroid, one face per loop edge
+        assert len(p.faces) == 4
+        assert np.allclose(p.new_vertices[0], [0.5, 0.5, 0.0])

@@ -163,3 +163,17 @@ def test_darn_fills_round_a_piece_touching_the_border(method):
     assert edge_table(every).counts.max() == 2
     assert _vertex_manifold(every, c)
     assert topology(every).components == 1
+
+
+def test_copies_whose_merge_gives_an_edge_three_faces_stay_apart():
+    """mergeable: copy 5 of vertex 1 has a face with vertex 3, as vertex 1 has; merged, the edge 1-3
+    would have two faces plus the fill's on the loop edge 3 -> 1. Copy 6 of vertex 2 shares no
+    neighbour with it: merged."""
+    from algorithms.darning import mergeable
+
+    faces = np.array([[1, 3, 7], [5, 8, 3], [6, 9, 10]])
+    loop = np.array([0, 1, 2, 3, 5, 4, 6])
+    pairs = np.array([[5, 1], [6, 2]])
+    assert mergeable(faces, loop, pairs).tolist() == [[6, 2]]
+    # without the face at the copy, edge 1-3 has one face and the loop edge: both pairs merge
+    assert mergeable(faces[[0, 2]], loop, pairs).tolist() == [[5, 1], [6, 2]]

@@ -140,6 +140,35 @@ def pinches(vertices: NDArray[np.float64], loop: NDArray[np.int64]) -> NDArray[n
     return pairs[pairs[:, 0] != pairs[:, 1]]
 
 
+def mergeable(faces: NDArray[np.int64], loop: NDArray[np.int64], pairs: NDArray[np.int64]) -> NDArray[np.int64]:
+    """The pairs (copy, kept) of ``pinches`` that can be one vertex again: each in turn, kept when
+    merging it with those kept before leaves no edge with more than two faces, counting the faces
+    of ``faces`` and one for each edge of the ``loop``'s parts (``split_pinched``: the fill's face
+    on it). Two copies with a
+    common neighbour whose edges both have faces already, or a loop edge that becomes an edge
+    with two faces (loose triangles of a sphere touching at corners, their gaps joined round the
+    copies), would give that edge three; such copies stay apart, two corners of the fill at one
+    point."""
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    lp = np.asarray(loop, dtype=np.int64).ravel()
+    p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if len(p) == 0:
+        return p
+    near = f[np.isin(f, p).any(axis=1)]  # only the edges at a copy or its kept vertex change
+    keep: list[int] = []
+    for k in range(len(p)):  # sequential: each pair is judged with the pairs kept before it
+        m = merge_copies(near, p[keep + [k]])
+        # the fill's faces: one on each edge of the loop's parts once the copies are one (a slit,
+        # a part of two vertices, closes without a face: its edge has the faces of both sides)
+        parts = split_pinched(lp, p[keep + [k]], merge_copies(f, p[keep + [k]]))
+        r = np.vstack([np.stack([q, np.roll(q, -1)], axis=1) for q in parts]) if parts else np.zeros((0, 2), np.int64)
+        e = np.sort(np.vstack([m[:, [0, 1]], m[:, [1, 2]], m[:, [2, 0]], r]), axis=1)
+        e = e[np.isin(e, p).any(axis=1) & (e[:, 0] != e[:, 1])]
+        if np.unique(e, axis=0, return_counts=True)[1].max(initial=0) <= 2:
+            keep.append(k)
+    return p[keep]
+
+
 def split_pinched(loop: NDArray[np.int64], pairs: NDArray[np.int64],
                   faces: NDArray[np.int64] | None = None) -> list[NDArray[np.int64]]:
     """The parts of a pinched loop (copies renumbered to the vertex kept), innermost first.
@@ -286,7 +315,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
         apart = np.vstack([np.asarray(apart, dtype=np.int64).reshape(-1, 3) if apart is not None
                            else np.zeros((0, 3), dtype=np.int64), e[:, [0, 1, 1]]])
-    pairs = pinches(v, lp) if join_copies else np.zeros((0, 2), dtype=np.int64)
+    pairs = mergeable(f, lp, pinches(v, lp)) if join_copies else np.zeros((0, 2), dtype=np.int64)
     if len(pairs) or (join_copies and len(np.unique(lp)) < n):
         # a pinched loop (copies of a vertex, or one vertex passed twice): its parts one after
         # another, the copies joined
@@ -320,16 +349,27 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     if weight == "dihedral":
         normals = _outside_normals(v, ring, lp)
     lf = triangulate(v[lp], weight=weight, forbidden=forbidden, outside_normals=normals)
-    patch_faces = lp[lf]
-    if method == "liepa" or (keep_fitting and len(ring) and _fits_its_border(v, ring, patch_faces)):
-        return Patch(np.zeros((0, 3)), patch_faces, lp, method, weight)
+    if forbidden is not None and _uses_forbidden(lf, forbidden):
+        # every triangulation of the loop needs a chord that is an edge of the surface already (a
+        # loop that passes twice beside an earlier patch: loose triangles of a sphere touching at
+        # corners, whose holes came out of one walk split at a bridge's chain): the paper's
+        # centroid fan has no chord at all; the refinement and fairing go on from it
+        c, lf = fan(v[lp])
+        v, glob_fan = np.vstack([v, c[None, :]]), np.r_[lp, nv]
+        if method == "liepa":
+            return Patch(c[None, :], glob_fan[lf], lp, method, weight)
+        patch_faces = glob_fan[lf]
+    else:
+        patch_faces = lp[lf]
+        if method == "liepa" or (keep_fitting and len(ring) and _fits_its_border(v, ring, patch_faces)):
+            return Patch(np.zeros((0, 3)), patch_faces, lp, method, weight)
     if fair_rounds < 1:
         raise ValueError(f"fair_rounds must be >= 1, got {fair_rounds}")
     if smooth < 0:
         raise ValueError(f"smooth must be >= 0, got {smooth}")
     # l(v) (frep.md §4): mean length of v's edges outside the patch; a loop vertex without any
     # (e.g. on a bridge chain, whose other side is not filled yet) takes its two loop edges' mean
-    scale = edge_scale(v, ring, nv)
+    scale = edge_scale(v, ring, len(v))  # the fan's centre (index nv, if any) has none: the loop's mean
     ln = np.linalg.norm(v[np.roll(lp, -1)] - v[lp], axis=1)  # loop edge j = (lp[j], lp[j+1])
     loop_mean = (ln + np.roll(ln, 1)) / 2
     scale[lp] = np.where(np.isfinite(scale[lp]), scale[lp], loop_mean)
@@ -346,7 +386,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     if method == "liepa-fair" and len(P) > nv:
         for k in range(fair_rounds):  # sequential: each round refines the previous round's surface
             if k:
-                s2 = np.concatenate([scale, np.full(len(P) - nv, np.nan)])  # new vertices: the loop's mean
+                s2 = np.concatenate([scale, np.full(len(P) - len(scale), np.nan)])  # new vertices: the loop's mean
                 r = refine(P, every, pf, density=density, scale=s2)
                 if not r.splits and not r.flips:
                     break  # the faired patch needs no new vertex: fairing it again changes little
@@ -365,6 +405,16 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
                 pf, nflip = relax(P, pf, every)
                 flips += nflip
     return Patch(P[nv:], pf, lp, method, weight, splits, flips)
+
+
+def _uses_forbidden(faces: NDArray[np.int64], forbidden: NDArray[np.bool_]) -> bool:
+    """Whether a triangulation of a loop (``faces``: loop positions) has a chord marked in
+    ``forbidden`` (the loop's own edges, between neighbours, are not chords)."""
+    n = len(forbidden)
+    e = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    d = np.abs(e[:, 0] - e[:, 1])
+    chord = (d != 1) & (d != n - 1)  # not (j, j + 1) nor (0, n - 1)
+    return bool(forbidden[e[chord, 0], e[chord, 1]].any())
 
 
 def _fits_its_border(v: NDArray[np.float64], ring: NDArray[np.int64], faces: NDArray[np.int64]) -> bool:
