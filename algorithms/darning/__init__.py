@@ -144,11 +144,10 @@ def mergeable(faces: NDArray[np.int64], loop: NDArray[np.int64], pairs: NDArray[
     """The pairs (copy, kept) of ``pinches`` that can be one vertex again: each in turn, kept when
     merging it with those kept before leaves no edge with more than two faces, counting the faces
     of ``faces`` and one for each edge of the ``loop``'s parts (``split_pinched``: the fill's face
-    on it). Two copies with a
-    common neighbour whose edges both have faces already, or a loop edge that becomes an edge
-    with two faces (loose triangles of a sphere touching at corners, their gaps joined round the
-    copies), would give that edge three; such copies stay apart, two corners of the fill at one
-    point."""
+    on it). Two copies with a common neighbour whose edges both have faces already, or a loop edge
+    that becomes an edge with two faces (loose triangles of a sphere touching at corners, their
+    gaps joined round the copies), would give that edge three; such copies stay apart, two corners
+    of the fill at one point."""
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     lp = np.asarray(loop, dtype=np.int64).ravel()
     p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
@@ -286,7 +285,8 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     smooth: iterations of tangential relaxation after each fairing (fair.tangential_relax: evens
         out the vertices along the surface; cotangent fairing alone leaves slivers), then edge flips.
     forbid_existing: chords that already are edges of the surface are not used (they would be
-        non-manifold); if every triangulation needs one, the unconstrained optimum is taken.
+        non-manifold); if every triangulation needs one, the loop is fanned from its centroid
+        (one new vertex, also for ``liepa``).
     apart: (K, 3) faces of the surface across a sharp crease from this hole (algorithms.creases):
         they count as existing edges (no chord, split or flip may duplicate one) but neither the
         edge-length scale nor the fairing reads them, so the patch does not round the crease off.
@@ -351,8 +351,8 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     lf = triangulate(v[lp], weight=weight, forbidden=forbidden, outside_normals=normals)
     if forbidden is not None and _uses_forbidden(lf, forbidden):
         # every triangulation of the loop needs a chord that is an edge of the surface already (a
-        # loop that passes twice beside an earlier patch: loose triangles of a sphere touching at
-        # corners, whose holes came out of one walk split at a bridge's chain): the paper's
+        # square whose two diagonals are edges beyond it; loose triangles of a sphere touching at
+        # corners gave such holes): the unconstrained optimum doubled that edge, the paper's
         # centroid fan has no chord at all; the refinement and fairing go on from it
         c, lf = fan(v[lp])
         v, glob_fan = np.vstack([v, c[None, :]]), np.r_[lp, nv]
