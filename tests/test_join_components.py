@@ -43,3 +43,59 @@ def test_join_components_avoids_bridges_along_the_boundary():
     assert {a2, b2} != {a, b} and q2 > 0
     mid = (mesh.vertices[a2] + mesh.vertices[b2]) / 2
     assert np.linalg.norm(mid[:2] - [1.25, 0.1]) > 0.1 + 1e-9  # clear of the small disk's rim
+
+
+def test_join_components_leaves_islands_out_of_reach_apart():
+    """Two unit disks (width 2 by their mean radius) 7 apart are beyond ISLAND_REACH (3 widths):
+    separate objects, not joined; 5 apart they are joined."""
+    from algorithms.repair import ISLAND_REACH
+
+    assert ISLAND_REACH == 3.0
+    for gap, joined in ((5.0, True), (7.0, False)):
+        mesh = combine(disk((0.0, 0.0, 0.0), 1.0, segments=32), disk((2.0 + gap, 0.0, 0.0), 1.0, segments=32))
+        frames = loop_frames(mesh)
+        comps = [[frames[0].island], [frames[1].island]]
+        assert (_join_components(mesh.vertices, frames, comps, lc=1.0, ki=1.0) is not None) == joined
+
+
+def test_two_objects_scanned_together_come_back_as_two_closed_surfaces():
+    """Two spheres with a hole each, 4 diameters apart: before ISLAND_REACH the force lines between
+    them (their quality does not depend on the distance) joined them by a tube 8 long. Near each
+    other, holes facing, they are still joined into one surface."""
+    import trimesh
+
+    from algorithms.metrics import topology
+    from algorithms.normalize import normalize
+    from algorithms.repair import repair
+
+    s = trimesh.creation.icosphere(3)
+    v, f = s.vertices, s.faces
+    cap = np.linalg.norm(v[f].mean(axis=1) - [1.0, 0.0, 0.0], axis=1) < 0.4  # a hole at x = +1
+    one = f[~cap]
+    mirrored = v * [-1.0, 1.0, 1.0]  # the second sphere's hole at x = -1, facing the first
+    for shift, pieces in ((10.0, 2), (2.3, 1)):
+        model = normalize(np.vstack([v, mirrored + [shift, 0.0, 0.0]]), np.vstack([one, one[:, ::-1] + len(v)]))
+        res = repair(model)
+        t = topology(res.mesh.faces)
+        assert t.watertight and t.components == pieces and t.genus == 0, (shift, t)
+        if pieces == 2:
+            assert "separate objects" in res.tunnel_note  # the report's notes ("tunnels")
+
+
+def test_force_lines_between_far_islands_are_refused():
+    """Two spheres 10 apart, both holes facing up and away from +x (around icosphere vertex 0): lines
+    from one hole arrive at the other (quality 0.67: it does not fall with the distance); each is
+    refused as joining separate objects, and both come back closed, apart."""
+    import trimesh
+
+    from algorithms.metrics import topology
+    from algorithms.normalize import normalize
+    from algorithms.repair import repair
+
+    s = trimesh.creation.icosphere(3)
+    v, f = s.vertices, s.faces
+    one = f[np.linalg.norm(v[f].mean(axis=1) - v[0], axis=1) >= 0.4]
+    res = repair(normalize(np.vstack([v, v + [10.0, 0.0, 0.0]]), np.vstack([one, one + len(v)])))
+    assert any("separate objects" in why for _, why in res.rejected)
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 2 and t.genus == 0
