@@ -54,8 +54,9 @@ def load_raw(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     try:
         loaded = trimesh.load(str(path), file_type=fmt, process=False, force="mesh",
                               maintain_order=True)
-    except IndexError as exc:
-        raise InputError(f"{path}: a face index is out of range ({exc})") from None
+    except IndexError as exc:  # a face index beyond the vertices, or a file that ends early
+        raise InputError(f"{path}: cannot read the {fmt.upper()} file: truncated, or a face index is out of "
+                         f"range ({exc})") from None
     except Exception as exc:  # trimesh raises many kinds for corrupt files
         raise InputError(f"{path}: cannot read the {fmt.upper()} file ({type(exc).__name__}: {exc})") from None
     v = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)

@@ -80,6 +80,7 @@ def test_point_cloud_files(tmp_path):
     ("range.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "out of range"),
     ("garbage.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 99\nend_header\n\x00\x01", "cannot read"),
     ("nothing.obj", b"# only a comment\n", "no vertices"),
+    ("header_only.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n", "truncated"),
 ])
 def test_bad_inputs_name_file_and_problem(tmp_path, name, content, msg):
     p = tmp_path / name
