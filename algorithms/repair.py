@@ -369,7 +369,6 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         cands.sort(key=lambda c: (-support[tuple(sorted((loop_of[c[0].start][0], loop_of[c[0].end][0])))],
                                   -c[0].quality))
         joined: set[tuple[int, int]] = set()  # loop pairs a kept island bridge joins
-        far: set[tuple[int, int]] = set()  # loop pairs a line joined across more than ISLAND_REACH
         # the facing rims of a tube cut across into two islands, across a gap longer than the tube
         # is wide: bridges along the tube, as between the rims of one island (step 2, _rim_bridges)
         island_rims = {(a, b) for a, b in rf.facing_rims(frames, list(range(len(frames))), same_island=False)
@@ -392,7 +391,6 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             if not _within_reach(frames[pair[0]], frames[pair[1]], mesh.vertices[b.start], mesh.vertices[b.end]):
                 rejected.append((b.candidate, f"joins islands more than {ISLAND_REACH:g} times their holes' width "
                                               "apart: separate objects"))
-                far.add(pair)  # type: ignore[arg-type]
                 continue
             why = state.conflict(b)
             if why is None and guard.effect(b.start, b.end) == "handle":
@@ -424,8 +422,9 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                 work.V(), frames, comps[k:] + comps[:k], lc_used, params.field.ki,
                 {v for b in bridges for v in (b.start, b.end)}, boundary, rules.along)) is not None), None)
             if sb is None:
-                notes.append(f"{len(comps)} pieces left apart: their islands lie more than {ISLAND_REACH:g} times "
-                             "their holes' width apart (separate objects), each closed on its own")
+                notes.append(f"{len(comps)} pieces left apart, each closed on its own: no straight bridge joins "
+                             f"them (islands more than {ISLAND_REACH:g} times their holes' width apart are "
+                             "separate objects)")
                 break
             ia, ib, q = sb
             b = Bridge(ia, ib, resample_chain(np.vstack([mesh.vertices[ia], mesh.vertices[ib]]), spacing), q,
@@ -1100,9 +1099,10 @@ def _rim_bridges(V: NDArray[np.float64], fa, fb, lc: float, ki: float, spacing: 
 def _join_components(V: NDArray[np.float64], frames: list, comps: list[list[int]], lc: float,
                      ki: float, taken: set[int] = frozenset(),
                      boundary: BoundaryEdges | None = None, along: float = 0.0) -> tuple[int, int, float] | None:
-    """The best straight bridge from the first component's loops to any other component's loops,
-    between loop vertices no kept bridge ends at (``taken``: two bridges may not share an end),
-    that does not run along the ``boundary`` (:meth:`BoundaryEdges.runs_along`)."""
+    """The best straight bridge from the first component's loops to the loops of the other
+    components within reach of them (:func:`_within_reach`), between loop vertices no kept bridge
+    ends at (``taken``: two bridges may not share an end), that does not run along the ``boundary``
+    (:meth:`BoundaryEdges.runs_along`); None if there is none."""
     first = set(comps[0])
     a_fr = [f for f in frames if f.island in first]
     if not a_fr:

@@ -154,17 +154,27 @@ def mergeable(faces: NDArray[np.int64], loop: NDArray[np.int64], pairs: NDArray[
     if len(p) == 0:
         return p
     near = f[np.isin(f, p).any(axis=1)]  # only the edges at a copy or its kept vertex change
+    ring = np.stack([lp, np.roll(lp, -1)], axis=1)
+
+    def most(m: NDArray[np.int64], r: NDArray[np.int64]) -> int:  # faces on the busiest edge at a pair
+        e = np.sort(np.vstack([m[:, [0, 1]], m[:, [1, 2]], m[:, [2, 0]], r]), axis=1)
+        e = e[np.isin(e, p).any(axis=1) & (e[:, 0] != e[:, 1])]
+        return int(np.unique(e, axis=0, return_counts=True)[1].max(initial=0))
+
     keep: list[int] = []
     for k in range(len(p)):  # sequential: each pair is judged with the pairs kept before it
         m = merge_copies(near, p[keep + [k]])
-        # the fill's faces: one on each edge of the loop's parts once the copies are one (a slit,
-        # a part of two vertices, closes without a face: its edge has the faces of both sides)
-        parts = split_pinched(lp, p[keep + [k]], merge_copies(f, p[keep + [k]]))
-        r = np.vstack([np.stack([q, np.roll(q, -1)], axis=1) for q in parts]) if parts else np.zeros((0, 2), np.int64)
-        e = np.sort(np.vstack([m[:, [0, 1]], m[:, [1, 2]], m[:, [2, 0]], r]), axis=1)
-        e = e[np.isin(e, p).any(axis=1) & (e[:, 0] != e[:, 1])]
-        if np.unique(e, axis=0, return_counts=True)[1].max(initial=0) <= 2:
-            keep.append(k)
+        # the fill's faces: one on each edge of the loop's parts once the copies are one. The parts'
+        # edges are the loop's, renamed, less the slits' (a part of two vertices closes without a
+        # face: its edge has the faces of both sides); so the loop's edges bound the count, and the
+        # parts (split_pinched, the costly part) are needed only when that bound is above two
+        if most(m, merge_copies(ring, p[keep + [k]])) > 2:
+            parts = split_pinched(lp, p[keep + [k]], merge_copies(f, p[keep + [k]]))
+            r = (np.vstack([np.stack([q, np.roll(q, -1)], axis=1) for q in parts]) if parts
+                 else np.zeros((0, 2), np.int64))
+            if most(m, r) > 2:
+                continue
+        keep.append(k)
     return p[keep]
 
 
