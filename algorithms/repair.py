@@ -1028,9 +1028,9 @@ def _within_reach(fa, fb, pa: NDArray[np.float64], pb: NDArray[np.float64]) -> b
     its mean radius). **(choice)**, beyond the spec, which takes every island for a piece of one
     surface: two objects scanned together (two spheres with a hole each, 4 diameters apart) came
     back as one, joined by a tube along the force lines between them, whose quality does not
-    depend on the distance (L_c is the span between the islands). On the 1,040 sweep runs and the
-    bench the islands joined lie at most 1 width apart. Facing rims of a tube across a long gap
-    (``_long_gap``) are joined along the tube regardless."""
+    depend on the distance (L_c is the span between the islands). No run of the sweep (1,040) nor
+    bench case changes with it. Facing rims of a tube across a long gap (``_long_gap``) are joined
+    along the tube regardless."""
     gap = float(np.linalg.norm(np.asarray(pa) - np.asarray(pb)))
     return gap <= ISLAND_REACH * 2 * max(loop_radius(fa), loop_radius(fb))
 
