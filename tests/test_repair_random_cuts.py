@@ -595,3 +595,35 @@ def test_a_cap_piece_beside_a_continued_crease_is_filled_in_the_cap_plane():
     assert z.min() >= -0.75 - 1e-9
     off = point_to_surface(res.mesh.vertices, truth.vertices, truth.faces).max() / truth.bbox_diagonal()
     assert off < 1e-3
+
+
+def star_prism() -> Mesh:
+    """A five-pointed star extruded 0.5 (radii 1 and 0.45), subdivided twice: flat faces and sharp
+    edges only, a shape the sweep does not hold."""
+    import trimesh
+
+    ang = np.linspace(0, 2 * np.pi, 10, endpoint=False)
+    r = np.where(np.arange(10) % 2 == 0, 1.0, 0.45)
+    n = len(ang)
+    ring = np.c_[r * np.cos(ang), r * np.sin(ang)]
+    v = np.vstack([[0, 0, 0], np.c_[ring, np.zeros(n)], [0, 0, 0.5], np.c_[ring, np.full(n, 0.5)]])
+    f = []
+    for i in range(n):
+        j = (i + 1) % n
+        f += [[0, 1 + j, 1 + i], [n + 1, n + 2 + i, n + 2 + j],  # bottom, top
+              [1 + i, 1 + j, n + 2 + j], [1 + i, n + 2 + j, n + 2 + i]]  # side
+    m = trimesh.Trimesh(v, np.array(f), process=False).subdivide().subdivide()
+    return Mesh(np.asarray(m.vertices), np.asarray(m.faces))
+
+
+def test_full_mode_with_every_fill_vertex_held_on_planes_and_creases():
+    """The star prism cut by a ball at a tip and a slab, 100 free points (the sweep's draws for a
+    cut MODEL:1:1): every new vertex that has faces is held (on a continued crease or a flat fill)
+    and the one left to move has none, so the free points' samples (darning/samples.free_samples)
+    had no fill face to orient them by and the repair stopped with an IndexError."""
+    star = star_prism()
+    d = star.bbox_diagonal()
+    n = np.array([-0.7876484983571733, -0.9898603672035974, -0.570894239950271])
+    model = random_cut(star, [(86, 0.03093613811525808 * d)], (n, -0.17221818712940656, 0.02364643199945354 * d),
+                       free_points=100, seed=1)
+    closed_repair(model, genus=0, mode="full")

@@ -66,6 +66,8 @@ def free_samples(free: NDArray[np.float64], V: NDArray[np.float64], F: NDArray[n
     near = np.zeros(len(V), dtype=bool)
     near[new] = True
     faces = F[near[F].any(axis=1)]
+    if not len(faces):  # no face at the given vertices (a star prism's cut: every new vertex with faces held)
+        return np.zeros((0, 3)), np.zeros((0, 3))
     t = V[faces]
     fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     _, j = cKDTree(t.mean(axis=1)).query(P, k=1)
