@@ -211,7 +211,7 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
         stack = [p] if p else []
         while stack:
             q = stack.pop()
-            cut = _pinch(q, nrm_of)
+            cut = _pinch(q, nrm_of, [set(np.unique(f).tolist()) for f in out_f])
             if cut is None:
                 pieces.append(q)
                 source.append(src[k])
@@ -315,14 +315,24 @@ def _sector(vertices: NDArray[np.float64], normals: NDArray[np.float64], polygon
     return best[1]
 
 
-def _pinch(polygon: tuple[int, ...], fragment_vertices: dict[int, NDArray[np.float64]]) -> tuple[int, int] | None:
-    """Positions (i, j) of the two passes of a fragment vertex the walk passes twice, or None."""
-    seen: dict[int, int] = {}
+def _pinch(polygon: tuple[int, ...], fragment_vertices: dict[int, NDArray[np.float64]],
+           fragments: list[set[int]] | None = None) -> tuple[int, int] | None:
+    """Positions (i, j) of the two passes of a fragment vertex the walk passes twice, or None. Not
+    where one side between the passes lies on one fragment alone (its vertices among the
+    ``fragments``' vertex sets): that fragment hangs there at the end of a chain, not across the
+    hole, and cut off it would be closed by its own face reversed (a two-face pillow: a knot's tube
+    cut by balls, a one-face fragment hanging at another; the split step bridges it instead,
+    ``fragment_bridge``)."""
+    def alone(side: tuple[int, ...]) -> bool:
+        return any(set(side) <= f for f in fragments or ())
+
+    seen: dict[int, list[int]] = {}
     for k, v in enumerate(polygon):
         if v in fragment_vertices:
-            if v in seen:
-                return seen[v], k
-            seen[v] = k
+            for i in seen.get(v, ()):
+                if not alone(polygon[i:k]) and not alone(polygon[k:] + polygon[:i]):
+                    return i, k
+            seen.setdefault(v, []).append(k)
     return None
 
 

@@ -62,3 +62,17 @@ def test_fragment_touching_two_border_vertices_is_kept():
         tri = case.incomplete.vertices[list(fragments[0].vertices)] if max(fragments[0].vertices) < len(
             case.incomplete.vertices) else None
         assert tri is not None and tuple(sorted(map(tuple, np.round(tri, 9)))) in keys
+
+
+def test_the_walk_is_not_cut_around_a_fragment_at_the_end_of_a_chain():
+    """fragments._pinch: a walk that passes vertex 5 twice, the side between the passes being one
+    fragment's loop alone (5, 6, 7: a fragment hanging at another), is not cut there; the same
+    walk is cut where a chain of fragments crosses it (both sides hold other vertices)."""
+    from algorithms.fragments import _pinch
+
+    walk = (0, 1, 5, 6, 7, 5, 2, 3)
+    marks = {5: None, 6: None, 7: None}
+    assert _pinch(walk, marks, [{5, 6, 7}]) is None
+    assert _pinch(walk, marks) == (2, 5)  # without the fragments' vertex sets: cut (the old rule)
+    across = (0, 1, 5, 6, 2, 3, 5, 7)  # each side holds border vertices: a chain across the hole
+    assert _pinch(across, marks, [{5, 6, 7}]) == (2, 6)

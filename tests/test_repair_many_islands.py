@@ -68,13 +68,24 @@ def test_loose_triangles_touching_at_corners_give_an_edge_manifold_surface(sub, 
     splits those vertices into copies and sets aside the pieces hanging at one vertex). Two things
     gave an edge of the output four faces: a straight bridge along an edge between two faces of a
     set-aside fragment that was then put back (3, 3); and a pinched hole whose copies, merged, made
-    an edge with two faces an edge of the fill too (3, 5). The output is still not always one piece
-    (README, known limits: for every third face of icosphere(3), 9 one-face fragments come back
-    closed on themselves by their reverse face), but every edge has two faces, consistently
-    oriented, and every input face is kept."""
+    an edge with two faces an edge of the fill too (3, 5). The output is still not always one
+    manifold piece (README, known limits), but every edge has two faces, consistently oriented, and
+    every input face is kept."""
     s = trimesh.creation.icosphere(sub)
     model = normalize(s.vertices, s.faces[::step])
     res = repair(model, RepairParams(field=FieldParams(mode=mode)))
     t = topology(res.mesh.faces)
     assert t.watertight and t.manifold_edges and t.oriented
+    assert_input_kept(model, res.mesh)
+
+
+def test_every_third_face_of_a_coarse_sphere_comes_back_as_one_sphere():
+    """Every third face of icosphere(2), touching at corners: a one-face fragment hanging at the end
+    of a chain of them was cut off the walk and closed by its own face reversed (two pieces); it is
+    bridged into its hole now (fragments._pinch): one closed genus-0 manifold sphere."""
+    s = trimesh.creation.icosphere(2)
+    model = normalize(s.vertices, s.faces[::3])
+    res = repair(model)
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 1 and t.genus == 0 and t.manifold_vertices
     assert_input_kept(model, res.mesh)

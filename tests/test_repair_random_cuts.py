@@ -627,3 +627,43 @@ def test_full_mode_with_every_fill_vertex_held_on_planes_and_creases():
     model = random_cut(star, [(86, 0.03093613811525808 * d)], (n, -0.17221818712940656, 0.02364643199945354 * d),
                        free_points=100, seed=1)
     closed_repair(model, genus=0, mode="full")
+
+
+def trefoil_tube(n: int = 240, sides: int = 20, radius: float = 0.35) -> Mesh:
+    """A tube of radius 0.35 around the trefoil knot (sin t + 2 sin 2t, cos t - 2 cos 2t, -sin 3t):
+    genus 1, knotted, a shape the sweep does not hold."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    c = np.c_[np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)]
+    tangent = np.roll(c, -1, axis=0) - np.roll(c, 1, axis=0)
+    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+    side = np.cross(tangent, [0.0, 0.0, 1.0])
+    side /= np.linalg.norm(side, axis=1)[:, None]
+    up = np.cross(tangent, side)
+    a = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    v = (c[:, None] + radius * (np.cos(a)[None, :, None] * side[:, None] + np.sin(a)[None, :, None] * up[:, None]))
+    i, j = np.meshgrid(np.arange(n), np.arange(sides), indexing="ij")
+    p, q = i * sides + j, i * sides + (j + 1) % sides
+    r, s = ((i + 1) % n) * sides + j, ((i + 1) % n) * sides + (j + 1) % sides
+    f = np.vstack([np.stack([p, r, q], -1).reshape(-1, 3), np.stack([q, r, s], -1).reshape(-1, 3)])
+    m = Mesh(v.reshape(-1, 3), f)
+    t_ = m.vertices[m.faces]
+    if np.einsum("ij,ij->", t_[:, 0], np.cross(t_[:, 1], t_[:, 2])) < 0:  # outward: positive volume
+        m = Mesh(m.vertices, m.faces[:, ::-1])
+    return m
+
+
+def test_a_fragment_hanging_at_another_fragment_is_not_closed_on_itself():
+    """The trefoil tube cut by four balls and a slab, 100 free points (the sweep's draws for a cut
+    MODEL:8:0): a one-face fragment hangs at a vertex of a two-face fragment, the end of a chain. The
+    walk was cut at that vertex as across a chain of fragments spanning the hole, so the one-face
+    fragment became a hole of its own and came back closed by its own face reversed: a second
+    component (genus 1.5 by Euler). It is now bridged into its hole (fragments._pinch)."""
+    knot = trefoil_tube()
+    d = knot.bbox_diagonal()
+    balls = [(2555, 0.06733827435545825), (3339, 0.08254889302656541), (2596, 0.07753704530356748),
+             (4157, 0.03582787887859197)]
+    n = np.array([-0.2421826767699952, 0.4858187656219262, 0.30584639352495013])
+    model = random_cut(knot, [(v, r * d) for v, r in balls], (n, -1.4133068721967517, 0.024696487222499185 * d),
+                       free_points=100, seed=8)
+    assert len(model.set_aside) == 4
+    closed_repair(model, genus=1)
