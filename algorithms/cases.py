@@ -58,6 +58,54 @@ def torus(major: float = 1.0, minor: float = 0.35, major_sections: int = 64, min
     return Mesh(pts, faces)
 
 
+def trefoil_tube(n: int = 240, sides: int = 20, radius: float = 0.35) -> Mesh:
+    """A tube of radius ``radius`` around the trefoil knot (sin t + 2 sin 2t, cos t - 2 cos 2t,
+    -sin 3t), ``n`` rings of ``sides`` vertices, faces wound outward: genus 1, knotted."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    c = np.c_[np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)]
+    tangent = np.roll(c, -1, axis=0) - np.roll(c, 1, axis=0)
+    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+    side = np.cross(tangent, [0.0, 0.0, 1.0])  # the knot's tangent is never vertical
+    side /= np.linalg.norm(side, axis=1)[:, None]
+    up = np.cross(tangent, side)
+    a = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    v = c[:, None] + radius * (np.cos(a)[None, :, None] * side[:, None] + np.sin(a)[None, :, None] * up[:, None])
+    i, j = np.meshgrid(np.arange(n), np.arange(sides), indexing="ij")
+    p, q = i * sides + j, i * sides + (j + 1) % sides
+    r, s = ((i + 1) % n) * sides + j, ((i + 1) % n) * sides + (j + 1) % sides
+    f = np.vstack([np.stack([p, r, q], -1).reshape(-1, 3), np.stack([q, r, s], -1).reshape(-1, 3)])
+    tri = v.reshape(-1, 3)[f]
+    if np.einsum("ij,ij->", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) < 0:  # six times the volume
+        f = f[:, ::-1]
+    return Mesh(v.reshape(-1, 3), f)
+
+
+def star_prism(points: int = 5, inner: float = 0.45, height: float = 0.5, subdivisions: int = 2) -> Mesh:
+    """A star of ``points`` points (outer radius 1, inner ``inner``) extruded ``height`` along z,
+    faces wound outward, each split in four ``subdivisions`` times: flat faces and sharp edges only,
+    convex and concave ones."""
+    m = 2 * points
+    ang = 2 * np.pi * np.arange(m) / m
+    rad = np.where(np.arange(m) % 2 == 0, 1.0, inner)
+    ring = np.c_[rad * np.cos(ang), rad * np.sin(ang)]
+    v = np.vstack([[0, 0, 0], np.c_[ring, np.zeros(m)], [0, 0, height], np.c_[ring, np.full(m, height)]])
+    f = []
+    for i in range(m):
+        j = (i + 1) % m
+        f += [[0, 1 + j, 1 + i], [m + 1, m + 2 + i, m + 2 + j],  # bottom, top
+              [1 + i, 1 + j, m + 2 + j], [1 + i, m + 2 + j, m + 2 + i]]  # side
+    v, f = np.asarray(v, dtype=np.float64), np.asarray(f, dtype=np.int64)
+    for _ in range(subdivisions):  # each face into four at its edge midpoints (shared midpoints once)
+        e = np.sort(np.vstack([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+        uniq, inv = np.unique(e, axis=0, return_inverse=True)
+        mid = len(v) + inv.reshape(3, -1).T  # midpoints of edges (0 1), (1 2), (2 0) of each face
+        v = np.vstack([v, v[uniq].mean(axis=1)])
+        a, b, c = f.T
+        m01, m12, m20 = mid.T
+        f = np.vstack([np.c_[a, m01, m20], np.c_[b, m12, m01], np.c_[c, m20, m12], np.c_[m01, m12, m20]])
+    return Mesh(v, f)
+
+
 def disk(center: tuple[float, float, float] = (0.0, 0.0, 0.0), radius: float = 1.0, *, segments: int = 64,
          rings: int = 4, flip: bool = False) -> Mesh:
     """A flat disk in the plane z = center[2], faces wound counter-clockwise seen from +z

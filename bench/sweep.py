@@ -58,6 +58,10 @@ TRIMESH = {
     "prism-8": (lambda t: t.creation.cylinder(radius=0.5, height=1.0, sections=8), 0),
     # a fat tube (radii 1 and 0.6): the hole through it is small
     "torus-thick": (lambda t: t.creation.torus(1.0, 0.6, major_sections=48, minor_sections=32), 1),
+    # trimesh's default torus (radii 1 and 0.35, 64 x 24): a slim tube of near-equilateral faces
+    "torus-trimesh": (lambda t: t.creation.torus(1.0, 0.35, major_sections=64, minor_sections=24), 1),
+    # 80 faces: a cut takes a few big faces of a coarse curved surface
+    "icosphere-80": (lambda t: t.creation.icosphere(1), 0),
 }
 
 
@@ -133,6 +137,10 @@ MODELS = {
     "featuretype": (lambda: load("featuretype.stl"), 9),
     "torus": (lambda: load("torus.stl"), 1),
     "bunny": (lambda: load("bunny_closed.ply"), 0),
+    # knotted tube (genus 1) and a star prism (flat faces, convex and concave sharp edges): shapes
+    # added after the rules were made, to be cut as unseen ones
+    "trefoil": (lambda: gen.trefoil_tube(), 1),
+    "star": (lambda: gen.star_prism(), 0),
     **{f"frep-{name}": (functools.partial(_frep, name), genus)
        for name, genus in (("blob", 0), ("perturbed", 0), ("boxsphere", 0), ("torus", 1),
                            ("dtorus", 2), ("ttorus", 3), ("lemni", 2))},

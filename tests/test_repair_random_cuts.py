@@ -24,7 +24,7 @@ from conftest import data_file
 from test_repair import assert_input_kept
 
 from algorithms.bridge_graph import BoundaryEdges, Bridge
-from algorithms.cases import cut
+from algorithms.cases import cut, star_prism, trefoil_tube
 from algorithms.creases import passes_near
 from algorithms.io import load_raw
 from algorithms.mesh import Mesh
@@ -597,68 +597,29 @@ def test_a_cap_piece_beside_a_continued_crease_is_filled_in_the_cap_plane():
     assert off < 1e-3
 
 
-def star_prism() -> Mesh:
-    """A five-pointed star extruded 0.5 (radii 1 and 0.45), subdivided twice: flat faces and sharp
-    edges only, a shape the sweep does not hold."""
-    import trimesh
-
-    ang = np.linspace(0, 2 * np.pi, 10, endpoint=False)
-    r = np.where(np.arange(10) % 2 == 0, 1.0, 0.45)
-    n = len(ang)
-    ring = np.c_[r * np.cos(ang), r * np.sin(ang)]
-    v = np.vstack([[0, 0, 0], np.c_[ring, np.zeros(n)], [0, 0, 0.5], np.c_[ring, np.full(n, 0.5)]])
-    f = []
-    for i in range(n):
-        j = (i + 1) % n
-        f += [[0, 1 + j, 1 + i], [n + 1, n + 2 + i, n + 2 + j],  # bottom, top
-              [1 + i, 1 + j, n + 2 + j], [1 + i, n + 2 + j, n + 2 + i]]  # side
-    m = trimesh.Trimesh(v, np.array(f), process=False).subdivide().subdivide()
-    return Mesh(np.asarray(m.vertices), np.asarray(m.faces))
-
-
 def test_full_mode_with_every_fill_vertex_held_on_planes_and_creases():
-    """The star prism cut by a ball at a tip and a slab, 100 free points (the sweep's draws for a
-    cut MODEL:1:1): every new vertex that has faces is held (on a continued crease or a flat fill)
-    and the one left to move has none, so the free points' samples (darning/samples.free_samples)
-    had no fill face to orient them by and the repair stopped with an IndexError."""
+    """The star prism (bench/sweep.py's model "star") cut by a ball at a tip and a slab, 100 free
+    points (the sweep's draws for its cut 1:1): every new vertex that has faces is held (on a
+    continued crease or a flat fill) and the one left to move has none, so the free points'
+    samples (darning/samples.free_samples) had no fill face to orient them by and the repair
+    stopped with an IndexError."""
     star = star_prism()
     d = star.bbox_diagonal()
     n = np.array([-0.7876484983571733, -0.9898603672035974, -0.570894239950271])
-    model = random_cut(star, [(86, 0.03093613811525808 * d)], (n, -0.17221818712940656, 0.02364643199945354 * d),
+    tip = [0.3410144118671816, 0.06612584088290323, 0.0]  # the ball's centre (a vertex)
+    model = random_cut(star, [(tip, 0.03093613811525808 * d)], (n, -0.17221818712940656, 0.02364643199945354 * d),
                        free_points=100, seed=1)
     closed_repair(model, genus=0, mode="full")
 
 
-def trefoil_tube(n: int = 240, sides: int = 20, radius: float = 0.35) -> Mesh:
-    """A tube of radius 0.35 around the trefoil knot (sin t + 2 sin 2t, cos t - 2 cos 2t, -sin 3t):
-    genus 1, knotted, a shape the sweep does not hold."""
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    c = np.c_[np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)]
-    tangent = np.roll(c, -1, axis=0) - np.roll(c, 1, axis=0)
-    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
-    side = np.cross(tangent, [0.0, 0.0, 1.0])
-    side /= np.linalg.norm(side, axis=1)[:, None]
-    up = np.cross(tangent, side)
-    a = np.linspace(0, 2 * np.pi, sides, endpoint=False)
-    v = (c[:, None] + radius * (np.cos(a)[None, :, None] * side[:, None] + np.sin(a)[None, :, None] * up[:, None]))
-    i, j = np.meshgrid(np.arange(n), np.arange(sides), indexing="ij")
-    p, q = i * sides + j, i * sides + (j + 1) % sides
-    r, s = ((i + 1) % n) * sides + j, ((i + 1) % n) * sides + (j + 1) % sides
-    f = np.vstack([np.stack([p, r, q], -1).reshape(-1, 3), np.stack([q, r, s], -1).reshape(-1, 3)])
-    m = Mesh(v.reshape(-1, 3), f)
-    t_ = m.vertices[m.faces]
-    if np.einsum("ij,ij->", t_[:, 0], np.cross(t_[:, 1], t_[:, 2])) < 0:  # outward: positive volume
-        m = Mesh(m.vertices, m.faces[:, ::-1])
-    return m
-
-
 def test_a_fragment_hanging_at_another_fragment_is_not_closed_on_itself():
-    """The trefoil tube cut by four balls and a slab, 100 free points (the sweep's draws for a cut
-    MODEL:8:0): a one-face fragment hangs at a vertex of a two-face fragment, the end of a chain. The
-    walk was cut at that vertex as across a chain of fragments spanning the hole, so the one-face
-    fragment became a hole of its own and came back closed by its own face reversed: a second
-    component (genus 1.5 by Euler). It is now bridged into its hole (fragments._pinch)."""
-    knot = trefoil_tube()
+    """The trefoil tube cut by four balls and a slab, 100 free points (bench/sweep.make_cut's draws
+    for seed 8, cut 0, of the model when it was tried under the name "knot"): a one-face fragment
+    hangs at a vertex of a two-face fragment, the end of a chain. The walk was cut at that vertex
+    as across a chain of fragments spanning the hole, so the one-face fragment became a hole of its
+    own and came back closed by its own face reversed: a second component (genus 1.5 by Euler). It
+    is now bridged into its hole (fragments._pinch)."""
+    knot = trefoil_tube()  # as bench/sweep.py's model "trefoil"
     d = knot.bbox_diagonal()
     balls = [(2555, 0.06733827435545825), (3339, 0.08254889302656541), (2596, 0.07753704530356748),
              (4157, 0.03582787887859197)]
