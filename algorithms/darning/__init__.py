@@ -359,7 +359,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     if weight == "dihedral":
         normals = _outside_normals(v, ring, lp)
     lf = triangulate(v[lp], weight=weight, forbidden=forbidden, outside_normals=normals)
-    if forbidden is not None and _uses_forbidden(lf, forbidden):
+    if lf is None:
         # every triangulation of the loop needs a chord that is an edge of the surface already (a
         # square whose two diagonals are edges beyond it; loose triangles of a sphere touching at
         # corners gave such holes): the unconstrained optimum doubled that edge, the paper's
@@ -415,16 +415,6 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
                 pf, nflip = relax(P, pf, every)
                 flips += nflip
     return Patch(P[nv:], pf, lp, method, weight, splits, flips)
-
-
-def _uses_forbidden(faces: NDArray[np.int64], forbidden: NDArray[np.bool_]) -> bool:
-    """Whether a triangulation of a loop (``faces``: loop positions) has a chord marked in
-    ``forbidden`` (the loop's own edges, between neighbours, are not chords)."""
-    n = len(forbidden)
-    e = np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    d = np.abs(e[:, 0] - e[:, 1])
-    chord = (d != 1) & (d != n - 1)  # not (j, j + 1) nor (0, n - 1)
-    return bool(forbidden[e[chord, 0], e[chord, 1]].any())
 
 
 def _fits_its_border(v: NDArray[np.float64], ring: NDArray[np.int64], faces: NDArray[np.int64]) -> bool:

@@ -45,8 +45,10 @@ def _angle(n1: NDArray, n2: NDArray) -> NDArray:
 
 def triangulate(points: NDArray[np.float64], *, weight: str = "area",
                 forbidden: NDArray[np.bool_] | None = None,
-                outside_normals: NDArray[np.float64] | None = None) -> NDArray[np.int64]:
-    """Minimum-weight triangulation of a closed polygon.
+                outside_normals: NDArray[np.float64] | None = None) -> NDArray[np.int64] | None:
+    """Minimum-weight triangulation of a closed polygon; None when every triangulation uses a
+    ``forbidden`` chord (the caller decides what then: darn fans the loop from its centroid, whose
+    faces have no chord).
 
     points: (n, 3) the loop, n >= 3, in the loop's positive direction (the surrounding surface
         has half-edge v_j -> v_{j+1}).
@@ -74,8 +76,7 @@ def triangulate(points: NDArray[np.float64], *, weight: str = "area",
         W00, M = _dp_dihedral(p, forbidden, outside_normals)
     if not np.isfinite(W00):
         if forbidden is not None and forbidden.any():
-            # every triangulation uses a forbidden chord: fall back to the unconstrained optimum
-            return triangulate(p, weight=weight, outside_normals=outside_normals)
+            return None  # every triangulation uses a forbidden chord
         raise ValueError("no finite-weight triangulation (non-finite coordinates?)")
     return _rebuild(M, n)
 
