@@ -94,16 +94,12 @@ def star_prism(points: int = 5, inner: float = 0.45, height: float = 0.5, subdiv
         j = (i + 1) % m
         f += [[0, 1 + j, 1 + i], [m + 1, m + 2 + i, m + 2 + j],  # bottom, top
               [1 + i, 1 + j, m + 2 + j], [1 + i, m + 2 + j, m + 2 + i]]  # side
-    v, f = np.asarray(v, dtype=np.float64), np.asarray(f, dtype=np.int64)
-    for _ in range(subdivisions):  # each face into four at its edge midpoints (shared midpoints once)
-        e = np.sort(np.vstack([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-        uniq, inv = np.unique(e, axis=0, return_inverse=True)
-        mid = len(v) + inv.reshape(3, -1).T  # midpoints of edges (0 1), (1 2), (2 0) of each face
-        v = np.vstack([v, v[uniq].mean(axis=1)])
-        a, b, c = f.T
-        m01, m12, m20 = mid.T
-        f = np.vstack([np.c_[a, m01, m20], np.c_[b, m12, m01], np.c_[c, m20, m12], np.c_[m01, m12, m20]])
-    return Mesh(v, f)
+    import trimesh
+
+    prism = trimesh.Trimesh(np.asarray(v, dtype=np.float64), np.asarray(f, dtype=np.int64), process=False)
+    for _ in range(subdivisions):  # each face into four at its edge midpoints
+        prism = prism.subdivide()
+    return Mesh(prism.vertices, prism.faces)
 
 
 def disk(center: tuple[float, float, float] = (0.0, 0.0, 0.0), radius: float = 1.0, *, segments: int = 64,
