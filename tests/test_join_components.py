@@ -46,12 +46,12 @@ def test_join_components_avoids_bridges_along_the_boundary():
 
 
 def test_join_components_leaves_islands_out_of_reach_apart():
-    """Two unit disks (width 2 by their mean radius) 7 apart are beyond ISLAND_REACH (3 widths):
-    separate objects, not joined; 5 apart they are joined."""
+    """Two unit disks (width 2 by their mean radius) a width short of ISLAND_REACH widths apart are
+    joined; a width beyond it, they are separate objects, not joined."""
     from algorithms.repair import ISLAND_REACH
 
-    assert ISLAND_REACH == 3.0
-    for gap, joined in ((5.0, True), (7.0, False)):
+    reach = 2.0 * ISLAND_REACH
+    for gap, joined in ((reach - 1.0, True), (reach + 1.0, False)):
         mesh = combine(disk((0.0, 0.0, 0.0), 1.0, segments=32), disk((2.0 + gap, 0.0, 0.0), 1.0, segments=32))
         frames = loop_frames(mesh)
         comps = [[frames[0].island], [frames[1].island]]
