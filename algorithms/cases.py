@@ -102,6 +102,17 @@ def star_prism(points: int = 5, inner: float = 0.45, height: float = 0.5, subdiv
     return Mesh(prism.vertices, prism.faces)
 
 
+def plate(extents: tuple[float, float, float] = (3.0, 2.0, 0.12), subdivisions: int = 5) -> Mesh:
+    """A thin box (trimesh's ``creation.box``), each face split in four ``subdivisions`` times: a
+    sheet whose two sides a ball cut removes together."""
+    import trimesh
+
+    box = trimesh.creation.box(extents)
+    for _ in range(subdivisions):
+        box = box.subdivide()
+    return Mesh(box.vertices, box.faces)
+
+
 def disk(center: tuple[float, float, float] = (0.0, 0.0, 0.0), radius: float = 1.0, *, segments: int = 64,
          rings: int = 4, flip: bool = False) -> Mesh:
     """A flat disk in the plane z = center[2], faces wound counter-clockwise seen from +z

@@ -77,7 +77,7 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     edge = _edges(tuple(sel))
     pos_in = {int(v): k for k in loop_ids for v in frames[k].vertices}
     normal_at = {int(v): frames[k].normal[i] for k in loop_ids for i, v in enumerate(frames[k].vertices)}
-    square = 0  # arrived lines left out by leaves_square
+    sheet = 0  # arrived lines left out by through_sheet
     bvh = mesh_bvh(model.mesh) if params.shielding and model.mesh.n_faces else None
     every: list[ForceLine] = []
     from_loop: dict[int, list[tuple[int, ForceLine]]] = {}
@@ -133,15 +133,14 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
                        start_vertex=int(fr.vertices[i]), start_island=fr.island, cancel=cancel)
             every.append(ln)
             if ln.arrived:
-                if leaves_square(ln, normal_at):
-                    square += 1
+                if through_sheet(ln, normal_at):
+                    sheet += 1
                     continue
                 from_loop.setdefault(k, []).append((pos_in.get(int(ln.end_vertex), -1), ln))
     facing = facing_rims(frames, loop_ids)
     chosen, notes = tunnel_pairs(from_loop, loop_ids, force=force, facing=facing)
-    if square:
-        notes.append(f"{square} line(s) left out: they leave the surface along its normal at both ends "
-                     "(the two sides of a sheet)")
+    if sheet:
+        notes.append(f"{sheet} line(s) left out: they run through a sheet, entering both its sides")
     # facing rims the rule joined, or that fewer than two lines joined (the rule could not judge
     # them): the pipeline joins them, by the lines' bridges or by bridges along the tube where the
     # gap is long or the lines do not make two (repair._rim_bridges)
@@ -155,22 +154,25 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     return LineSet(lc_inter, tuple(chosen), tuple(every), "; ".join(notes), rims)
 
 
-SQUARE = 0.7  # leaves_square: |n . d| above this at both ends (within about 45 degrees of the normal)
+SHEET = 0.7  # through_sheet: -n . d above this at both ends (within about 45 degrees of the inward normal)
 
 
-def leaves_square(line: ForceLine, normal_at: dict[int, NDArray[np.float64]], *, limit: float = SQUARE) -> bool:
-    """Whether an arrived line leaves the surface along its normal at both ends: at each end, the
-    unit vector d from the end vertex to the line's point half its length away has |n . d| above
-    ``limit``, n the surface normal there (``normal_at``, by vertex).
+def through_sheet(line: ForceLine, normal_at: dict[int, NDArray[np.float64]], *, limit: float = SHEET) -> bool:
+    """Whether an arrived line runs through the material between the two sides of a sheet: at
+    each end, the unit vector d from the end vertex to the line's point half its length away has
+    n . d below -``limit``, n the outward surface normal there (``normal_at``, by vertex): the line
+    enters the solid nearly along the inward normal at both ends.
 
     **(choice)**, beyond the spec, for the tunnel rule. A hole punched through a thin sheet leaves
     two loops a sheet's thickness apart, nearer each other than the far side of their own holes:
     the lines between them are short and beat the lines across the holes, and the two loops got a
     tunnel (a handle the truth does not have: 4 of 20 random cuts of a thin plate in light mode).
-    Such a line turns square off both surfaces (|n . d| 0.83-1.0 there), where a line along a
-    tube cut across continues both (0.02-0.35 on the bench's cut tori). A line that continues the
-    surface at one end (a cut through-hole's wall, joined to a loop on the face it opens onto)
-    is kept. Left-out lines neither join their loops nor count against other lines.
+    Such a line enters both sides (n . d from -0.83 to -1.0 at both ends), where a line along a
+    tube cut across continues both surfaces (|n . d| 0.02-0.35 on the bench's cut tori). Kept: a
+    line between two faces that look the same way, a step apart (it enters one and leaves the
+    other: featuretype cut by a slab, the rims of a cut through-hole's wall, n . d -1 and +1,
+    tests/test_repair_cad_cuts.py), and a line that continues the surface at one end. Lines
+    through a sheet neither join their loops nor count against other lines.
     """
     P = line.points
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
@@ -183,7 +185,7 @@ def leaves_square(line: ForceLine, normal_at: dict[int, NDArray[np.float64]], *,
             return False
         d = Q[min(int(np.searchsorted(along, half)), len(Q) - 1)] - Q[0]
         nd = float(np.linalg.norm(d))
-        if nd <= 0 or abs(float(n @ d)) / nd <= limit:
+        if nd <= 0 or float(n @ d) / nd >= -limit:
             return False
     return True
 

@@ -1,0 +1,74 @@
+"""A hole punched through a thin sheet: two loops a sheet's thickness apart, one on each side.
+They are two holes to cap, not the rims of a tunnel (repair_field.through_sheet)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_repair import assert_input_kept
+
+import algorithms.repair_field as rf
+from algorithms import cases as gen
+from algorithms.metrics import distances, topology
+from algorithms.normalize import normalize
+from algorithms.params import FieldParams
+from algorithms.records import ARRIVED, ForceLine
+from algorithms.repair import RepairParams, repair
+from bench.cases import ball
+
+
+def _line(points, start: int = 0, end: int = 1) -> ForceLine:
+    p = np.asarray(points, dtype=np.float64)
+    z = np.zeros_like(p)
+    return ForceLine(p, z, z, np.zeros(len(p)), ARRIVED, start, 0, end, 0)
+
+
+def test_through_sheet_when_the_line_enters_the_solid_at_both_ends():
+    up, down = np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, -1.0])
+    # straight down from the top side (normal up) to the bottom side (normal down) of a sheet
+    assert rf.through_sheet(_line([[0, 0, 0.06], [0, 0, 0.0], [0, 0, -0.06]]), {0: up, 1: down})
+    # 40 degrees off the normal at both ends: still through (-n . d = cos 40 = 0.77 > 0.7)
+    a = np.radians(40)
+    assert rf.through_sheet(_line([[0, 0, 0], [np.sin(a), 0, -np.cos(a)]]), {0: up, 1: down})
+    # 50 degrees off: not (cos 50 = 0.64)
+    a = np.radians(50)
+    assert not rf.through_sheet(_line([[0, 0, 0], [np.sin(a), 0, -np.cos(a)]]), {0: up, 1: down})
+    # between two faces that look the same way, a step apart (featuretype's cut through-hole wall):
+    # the line enters one and leaves the other
+    assert not rf.through_sheet(_line([[0, 0, 0], [0, 0, -0.1]]), {0: up, 1: up})
+    # across a gap between two faces that look at each other (outside the solid at both ends)
+    assert not rf.through_sheet(_line([[0, 0, 0], [0, 0, 0.1]]), {0: up, 1: down})
+    # along a tube cut across: the line continues both surfaces (normals across the line)
+    side = np.array([0.0, 1.0, 0.0])
+    assert not rf.through_sheet(_line([[0, 0, 0], [0.5, 0, 0], [1, 0, 0]]), {0: side, 1: side})
+    # into the solid at one end only (a through-hole's wall joined to the face it opens onto): kept
+    assert not rf.through_sheet(_line([[0, 0, 0], [0, 0, -0.5], [0, 0, -1]]), {0: up, 1: side})
+    # the direction is taken half the line's length away: a line that leaves along the surface
+    # and only then turns down is not through
+    bent = [[0, 0, 0], [0.4, 0, 0], [0.5, 0, -0.1], [0.5, 0, -0.5]]
+    assert not rf.through_sheet(_line(bent), {0: up, 1: up})
+    # an end whose normal is unknown (not a loop vertex) is never through
+    assert not rf.through_sheet(_line([[0, 0, 0], [0, 0, -1]]), {0: up})
+
+
+@pytest.mark.parametrize("mode", ["light", "full"])
+def test_a_hole_punched_through_a_thin_sheet_is_capped_on_both_sides(mode, monkeypatch):
+    truth = gen.plate((3.0, 2.0, 0.12))
+    case = gen.cut(truth, ball(truth, np.array([0.0, 0.0, 0.06]), 0.2), name="sheet", description="",
+                   free_points=0, seed=1)
+    model = normalize(case.incomplete.vertices, case.incomplete.faces)
+    params = RepairParams(field=FieldParams(mode=mode))
+    res = repair(model, params)
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 1 and t.genus == 0, res.tunnel_note
+    assert "run through a sheet" in res.tunnel_note
+    assert_input_kept(model, res.mesh)
+    # the two caps are flat: the truth's two sides, to within a small fraction of the thickness
+    d = distances(res.mesh.vertices, res.mesh.faces, truth.vertices, truth.faces)
+    assert d.hausdorff * truth.bbox_diagonal() < 0.01 * 0.12
+    # without the test the two short lines through the sheet beat the lines across each hole and
+    # the sheet gets a tunnel: genus 1
+    monkeypatch.setattr(rf, "through_sheet", lambda *a, **k: False)
+    res = repair(model, params)
+    assert topology(res.mesh.faces).genus == 1
+    assert "a tunnel" in res.tunnel_note
