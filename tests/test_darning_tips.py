@@ -179,3 +179,28 @@ def test_the_zero_in_a_bracket_takes_a_few_newton_steps_not_twenty_bisections(mo
     rim = 0.5 * np.sqrt(1 - x[:, 0] ** 2)
     assert np.abs(lifted[:, 2] - rim).max() < 0.01
     assert np.abs(rbf.value(lifted)).max() < 1e-6 * np.abs(rbf.value(x)).max() + 1e-9
+
+
+def test_rbf_values_are_the_same_on_one_thread_and_on_many(monkeypatch):
+    from algorithms.darning import implicit
+
+    rng = np.random.default_rng(7)
+    c, w, a = rng.random((300, 3)), rng.normal(size=300), rng.normal(size=4)
+    q = rng.random((50, 3))
+    serial = implicit._rbf_eval_serial(q, c, w, a)
+    parallel = implicit._rbf_eval_parallel(q, c, w, a)
+    for s, p in zip(serial, parallel, strict=True):
+        assert np.array_equal(s, p)  # each point's sums in the same order: the same bits
+    # the exact value at one point, summed in numpy
+    d = q[3] - c
+    r = np.linalg.norm(d, axis=1)
+    assert abs(serial[0][3] - (a[0] + a[1:] @ q[3] + (w * r**3).sum())) < 1e-9
+    assert np.allclose(serial[1][3], a[1:] + 3 * ((w * r)[:, None] * d).sum(axis=0))
+    # a few points against a few centres run on one thread; many pairs in parallel
+    calls = []
+    monkeypatch.setattr(implicit, "_rbf_eval_serial", lambda *x: calls.append("serial") or serial)
+    monkeypatch.setattr(implicit, "_rbf_eval_parallel", lambda *x: calls.append("parallel") or parallel)
+    implicit._rbf_eval(q, c, w, a)
+    monkeypatch.setattr(implicit, "PARALLEL_WORK", len(q) * len(c))
+    implicit._rbf_eval(q, c, w, a)
+    assert calls == ["serial", "parallel"]

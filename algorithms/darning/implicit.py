@@ -182,31 +182,60 @@ def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacin
     return RBFImplicit(c, sol[:m], sol[m:])
 
 
-@numba.njit(cache=True, parallel=True)
+PARALLEL_WORK = 1_000_000  # _rbf_eval: points x centres from which the points are shared among threads
+
+
 def _rbf_eval(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.float64],
-              a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:  # pragma: no cover
+              a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """f(q) = sum_i w_i |q - c_i|^3 + a0 + a.q and its gradient 3 sum_i w_i |q - c_i| (q - c_i) + a,
-    compiled and parallel over the points (each point's sums in the same order as one thread's): a
-    fill's lines are sampled at tens of thousands of points against hundreds of centres."""
+    compiled, parallel over the points when there are at least ``PARALLEL_WORK`` point-centre
+    pairs (a fill's lines are sampled at tens of thousands of points against hundreds of centres),
+    else on one thread: a Newton step on a few points costs microseconds, and a parallel launch on a
+    busy 2-core machine waited 4-12 ms for its second thread (thin plate cut 1:0 of the sweep: 357
+    calls, 5.5 s). Each point's sums run in the same order either way: the same values."""
+    kernel = _rbf_eval_parallel if len(q) * len(c) >= PARALLEL_WORK else _rbf_eval_serial
+    return kernel(q, c, w, a)
+
+
+@numba.njit(cache=True)
+def _rbf_point(q: NDArray[np.float64], k: int, c: NDArray[np.float64], w: NDArray[np.float64],
+               a: NDArray[np.float64], val: NDArray[np.float64], grad: NDArray[np.float64]) -> None:  # pragma: no cover
+    """Value and gradient at the point q[k] into val[k], grad[k] (the centres in order)."""
+    v = a[0] + a[1] * q[k, 0] + a[2] * q[k, 1] + a[3] * q[k, 2]
+    g0, g1, g2 = a[1], a[2], a[3]
+    for i in range(len(c)):
+        d0 = q[k, 0] - c[i, 0]
+        d1 = q[k, 1] - c[i, 1]
+        d2 = q[k, 2] - c[i, 2]
+        r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        wr = w[i] * r
+        v += wr * r * r
+        g0 += 3.0 * wr * d0
+        g1 += 3.0 * wr * d1
+        g2 += 3.0 * wr * d2
+    val[k] = v
+    grad[k, 0] = g0
+    grad[k, 1] = g1
+    grad[k, 2] = g2
+
+
+@numba.njit(cache=True, parallel=True)
+def _rbf_eval_parallel(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.float64],
+                       a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:  # pragma: no cover
     val = np.empty(len(q))
     grad = np.empty((len(q), 3))
     for k in numba.prange(len(q)):
-        v = a[0] + a[1] * q[k, 0] + a[2] * q[k, 1] + a[3] * q[k, 2]
-        g0, g1, g2 = a[1], a[2], a[3]
-        for i in range(len(c)):
-            d0 = q[k, 0] - c[i, 0]
-            d1 = q[k, 1] - c[i, 1]
-            d2 = q[k, 2] - c[i, 2]
-            r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            wr = w[i] * r
-            v += wr * r * r
-            g0 += 3.0 * wr * d0
-            g1 += 3.0 * wr * d1
-            g2 += 3.0 * wr * d2
-        val[k] = v
-        grad[k, 0] = g0
-        grad[k, 1] = g1
-        grad[k, 2] = g2
+        _rbf_point(q, k, c, w, a, val, grad)
+    return val, grad
+
+
+@numba.njit(cache=True)
+def _rbf_eval_serial(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.float64],
+                     a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:  # pragma: no cover
+    val = np.empty(len(q))
+    grad = np.empty((len(q), 3))
+    for k in range(len(q)):
+        _rbf_point(q, k, c, w, a, val, grad)
     return val, grad
 
 
