@@ -62,6 +62,13 @@ TRIMESH = {
     "torus-trimesh": (lambda t: t.creation.torus(1.0, 0.35, major_sections=64, minor_sections=24), 1),
     # 80 faces: a cut takes a few big faces of a coarse curved surface
     "icosphere-80": (lambda t: t.creation.icosphere(1), 0),
+    # profiles revolved about z (64 sections, subdivided twice): a vase with a narrow neck, and a
+    # mushroom whose cap overhangs its stem
+    "vase": (lambda t: _subdivided(t.creation.revolve(
+        [[0, 0], [0.5, 0], [0.6, 0.3], [0.55, 0.8], [0.2, 1.2], [0.18, 1.5], [0.3, 1.7], [0, 1.7]],
+        sections=64), 2), 0),
+    "mushroom": (lambda t: _subdivided(t.creation.revolve(
+        [[0, 0], [0.25, 0], [0.22, 0.8], [0.9, 0.85], [0.85, 1.05], [0.5, 1.3], [0, 1.35]], sections=64), 2), 0),
 }
 
 
@@ -97,17 +104,33 @@ def _flat_torus() -> Mesh:
     return Mesh(v, m.faces)
 
 
+def _hole(cx: float, radius: float = 0.18) -> str:
+    """Outside a vertical cylinder at (cx, 0): a round through-hole where it is and-ed."""
+    return f"((x-{cx})**2 + y**2 - {radius}**2)"
+
+
 def _tube(cx: float, major: float = 0.45, minor: float = 0.17) -> str:
     return f"({minor}**2 - (sqrt((x-{cx})**2 + y**2) - {major})**2 - z**2)"
 
 
-# F-rep objects of genus 2 and 3 (text, bounds), triangulated like the demo objects: handles side
+# F-rep objects (text, bounds), triangulated like the demo objects: of genus 2 and 3, handles side
 # by side, and a thin tube round a figure eight (the lemniscate (x^2 + y^2)^2 = x^2 - y^2), whose
-# cuts often take a whole piece of the tube
+# cuts often take a whole piece of the tube; and thin walls, narrow bars and saddles
 FREP_EXTRA = {
     "dtorus": (f"r_or({_tube(-0.42)}, {_tube(0.42)})", ((-1.1, -0.7, -0.3), (1.1, 0.7, 0.3))),
     "ttorus": (f"r_or(r_or({_tube(-0.84)}, {_tube(0.0)}), {_tube(0.84)})", ((-1.5, -0.7, -0.3), (1.5, 0.7, 0.3))),
     "lemni": ("0.012 - ((x**2 + y**2)**2 - x**2 + y**2)**2 - z**2", ((-1.2, -0.6, -0.2), (1.2, 0.6, 0.2))),
+    # added after the sheet rule (repair_field.through_sheet) was made on a thin plate: a plate with
+    # three round through-holes, a bowl (a hemispherical shell 0.15 thick), two balls on a bar,
+    # three rods crossing
+    "plate3": ("r_and(r_and(r_and(1 - x**2, 0.36 - y**2), 0.0225 - z**2), r_and(r_and("
+               f"{_hole(-0.55)}, {_hole(0.0)}), {_hole(0.55)}))", ((-1.1, -0.7, -0.2), (1.1, 0.7, 0.2))),
+    "bowl": ("r_and(r_and(1 - x**2 - y**2 - z**2, x**2 + y**2 + z**2 - 0.85**2), -z)",
+             ((-1.1, -1.1, -1.1), (1.1, 1.1, 0.1))),
+    "dumbbell": ("r_or(r_or(0.16 - (x-0.7)**2 - y**2 - z**2, 0.16 - (x+0.7)**2 - y**2 - z**2), "
+                 "r_and(0.0225 - y**2 - z**2, 0.64 - x**2))", ((-1.2, -0.5, -0.5), (1.2, 0.5, 0.5))),
+    "cross": ("r_or(r_or(r_and(0.04 - y**2 - z**2, 0.81 - x**2), r_and(0.04 - x**2 - z**2, 0.81 - y**2)), "
+              "r_and(0.04 - x**2 - y**2, 0.81 - z**2))", ((-1, -1, -1), (1, 1, 1))),
 }
 
 
@@ -141,9 +164,12 @@ MODELS = {
     # added after the rules were made, to be cut as unseen ones
     "trefoil": (lambda: gen.trefoil_tube(), 1),
     "star": (lambda: gen.star_prism(), 0),
+    # a thin plate (3 x 2 x 0.12): a ball takes both sides (the sheet rule's shape, repair_field.through_sheet)
+    "thin-plate": (lambda: gen.plate((3.0, 2.0, 0.12)), 0),
     **{f"frep-{name}": (functools.partial(_frep, name), genus)
        for name, genus in (("blob", 0), ("perturbed", 0), ("boxsphere", 0), ("torus", 1),
-                           ("dtorus", 2), ("ttorus", 3), ("lemni", 2))},
+                           ("dtorus", 2), ("ttorus", 3), ("lemni", 2), ("plate3", 3), ("bowl", 0),
+                           ("dumbbell", 0), ("cross", 0))},
 }
 
 
