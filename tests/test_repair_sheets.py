@@ -72,3 +72,21 @@ def test_a_hole_punched_through_a_thin_sheet_is_capped_on_both_sides(mode, monke
     res = repair(model, params)
     assert topology(res.mesh.faces).genus == 1
     assert "a tunnel" in res.tunnel_note
+
+
+def test_lines_through_a_sheet_between_two_loops_join_neither(monkeypatch):
+    """featuretype, sweep cut 3:1 (bench/sweep.py: a slab along a row of through-holes): two lines
+    between loops run through the part's wall; as lines that join neither they beat the lines of
+    loops 3 and 4, which were a spurious tunnel before (genus 10)."""
+    from bench.sweep import make_cut
+
+    case = make_cut("featuretype", 3, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 1 and t.genus == 9, res.tunnel_note
+    assert "loops 3 and 4: 9 lines join them, beaten" in res.tunnel_note
+    assert_input_kept(model, res.mesh)
+    monkeypatch.setattr(rf, "through_sheet", lambda *a, **k: False)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert topology(res.mesh.faces).genus == 10
