@@ -77,7 +77,7 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     edge = _edges(tuple(sel))
     pos_in = {int(v): k for k in loop_ids for v in frames[k].vertices}
     normal_at = {int(v): frames[k].normal[i] for k in loop_ids for i, v in enumerate(frames[k].vertices)}
-    sheet = 0  # arrived lines left out by through_sheet
+    sheet = 0  # arrived lines between two loops through a sheet (through_sheet): they join neither
     bvh = mesh_bvh(model.mesh) if params.shielding and model.mesh.n_faces else None
     every: list[ForceLine] = []
     from_loop: dict[int, list[tuple[int, ForceLine]]] = {}
@@ -168,12 +168,13 @@ def through_sheet(line: ForceLine, normal_at: dict[int, NDArray[np.float64]], *,
     **(choice)**, beyond the spec, for the tunnel rule. A hole punched through a thin sheet leaves
     two loops a sheet's thickness apart, nearer each other than the far side of their own holes:
     the lines between them are short and beat the lines across the holes, and the two loops got a
-    tunnel (a handle the truth does not have: 4 of 20 random cuts of a thin plate in light mode).
-    Such a line enters both sides (n . d from -0.83 to -1.0 at both ends), where a line along a
-    tube cut across continues both surfaces (|n . d| 0.02-0.35 on the bench's cut tori). Kept: a
-    line between two faces that look the same way, a step apart (it enters one and leaves the
-    other: featuretype cut by a slab, the rims of a cut through-hole's wall, n . d -1 and +1,
-    tests/test_repair_cad_cuts.py), and a line that continues the surface at one end. A line
+    tunnel (a handle the truth does not have: 4 of 20 cuts of the sweep's thin-plate in light
+    mode, 1 in full mode; none since). Such a line enters both sides (n . d from -0.83 to -1.0 at
+    both ends), where a line along a tube cut across continues both surfaces (|n . d| 0.02-0.35 on
+    the bench's cut tori). Kept: a line between two faces that look the same way, a step apart:
+    it enters one and leaves the other (featuretype cut by a slab, tests/test_repair_cad_cuts.py:
+    two walls facing -y 0.09 apart, the line along +y, n . d -1.0 at its start), and a line that
+    continues the surface at one end. A line
     through a sheet between two loops joins neither (``tunnel_lines``), but still counts against
     the other lines of its start loop. Left out altogether (lines across a loop's own hole too:
     15 lines on bench case bunny-many-holes in full mode), two lines between loops 14 and 24 there

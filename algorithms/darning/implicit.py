@@ -182,7 +182,7 @@ def fit_rbf(points: NDArray[np.float64], normals: NDArray[np.float64], *, spacin
     return RBFImplicit(c, sol[:m], sol[m:])
 
 
-PARALLEL_WORK = 1_000_000  # _rbf_eval: points x centres from which the points are shared among threads
+PARALLEL_WORK = 20_000  # _rbf_eval: points x centres from which the points are shared among threads
 
 
 def _rbf_eval(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.float64],
@@ -191,8 +191,10 @@ def _rbf_eval(q: NDArray[np.float64], c: NDArray[np.float64], w: NDArray[np.floa
     compiled, parallel over the points when there are at least ``PARALLEL_WORK`` point-centre
     pairs (a fill's lines are sampled at tens of thousands of points against hundreds of centres),
     else on one thread: a Newton step on a few points costs microseconds, and a parallel launch on a
-    busy 2-core machine waited 4-12 ms for its second thread (thin plate cut 1:0 of the sweep: 357
-    calls, 5.5 s). Each point's sums run in the same order either way: the same values."""
+    busy 2-core machine waited 4-12 ms for its second thread. Measured (light mode, best of two,
+    sweep cuts): bunny 5:0 2.2 s all parallel, 2.1 s from 20,000 pairs, 2.5 s from 1,000,000; with
+    two busy processes beside it, thin plate 1:0 3.9-5.3 s all parallel, 3.7 s from 20,000. Each
+    point's sums run in the same order either way: the same values."""
     kernel = _rbf_eval_parallel if len(q) * len(c) >= PARALLEL_WORK else _rbf_eval_serial
     return kernel(q, c, w, a)
 
