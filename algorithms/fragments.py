@@ -207,11 +207,12 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
     # passes that vertex twice, once on each fragment's loop; the chain cuts the hole in two there
     pieces: list[tuple[int, ...]] = []
     source: list[int] = []
+    fragment_sets = [set(np.unique(f).tolist()) for f in out_f]  # each attached fragment's vertices
     for k, p in enumerate(polys):
         stack = [p] if p else []
         while stack:
             q = stack.pop()
-            cut = _pinch(q, nrm_of, [set(np.unique(f).tolist()) for f in out_f])
+            cut = _pinch(q, nrm_of, fragment_sets)
             if cut is None:
                 pieces.append(q)
                 source.append(src[k])
