@@ -96,9 +96,8 @@ def star_prism(points: int = 5, inner: float = 0.45, height: float = 0.5, subdiv
               [1 + i, 1 + j, m + 2 + j], [1 + i, m + 2 + j, m + 2 + i]]  # side
     import trimesh
 
-    prism = trimesh.Trimesh(np.asarray(v, dtype=np.float64), np.asarray(f, dtype=np.int64), process=False)
-    for _ in range(subdivisions):  # each face into four at its edge midpoints
-        prism = prism.subdivide()
+    prism = subdivided(trimesh.Trimesh(np.asarray(v, dtype=np.float64), np.asarray(f, dtype=np.int64), process=False),
+                       subdivisions)
     return Mesh(prism.vertices, prism.faces)
 
 
@@ -107,10 +106,16 @@ def plate(extents: tuple[float, float, float] = (3.0, 2.0, 0.12), subdivisions: 
     sheet whose two sides a ball cut removes together."""
     import trimesh
 
-    box = trimesh.creation.box(extents)
-    for _ in range(subdivisions):
-        box = box.subdivide()
+    box = subdivided(trimesh.creation.box(extents), subdivisions)
     return Mesh(box.vertices, box.faces)
+
+
+def subdivided(mesh, times: int):
+    """A ``trimesh.Trimesh`` with each face split in four at its edge midpoints ``times`` times
+    (``Trimesh.subdivide``)."""
+    for _ in range(times):
+        mesh = mesh.subdivide()
+    return mesh
 
 
 def disk(center: tuple[float, float, float] = (0.0, 0.0, 0.0), radius: float = 1.0, *, segments: int = 64,

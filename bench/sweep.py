@@ -30,30 +30,23 @@ from algorithms.mesh import Mesh
 from bench.cases import DATA, BenchCase, ball, load, slab
 from bench.repair import meshlib_fill, ours_repair, run_isolated, score
 
-
-def _subdivided(m, times: int):
-    for _ in range(times):
-        m = m.subdivide()
-    return m
-
-
 # trimesh's own primitives, slivers and all: name -> (builder of trimesh's module, genus)
 TRIMESH = {
     "capsule": (lambda t: t.creation.capsule(height=2.0, radius=0.6, count=[48, 48]), 0),
     # a thick washer: genus 1 with four sharp circular creases
-    "annulus": (lambda t: _subdivided(t.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96), 2), 1),
+    "annulus": (lambda t: gen.subdivided(t.creation.annulus(r_min=0.5, r_max=1.2, height=0.6, sections=96), 2), 1),
     # side triangles as long as the cylinder, caps fans of slivers
     "cylinder": (lambda t: t.creation.cylinder(radius=0.5, height=1.5, sections=64), 0),
     # the same, subdivided twice: its rims polygons with straight runs
-    "cylinder-sub": (lambda t: _subdivided(t.creation.cylinder(radius=0.5, height=1.5, sections=48), 2), 0),
+    "cylinder-sub": (lambda t: gen.subdivided(t.creation.cylinder(radius=0.5, height=1.5, sections=48), 2), 0),
     # flat faces and sharp right-angled edges, subdivided four times
-    "box": (lambda t: _subdivided(t.creation.box((1.0, 0.7, 0.4)), 4), 0),
+    "box": (lambda t: gen.subdivided(t.creation.box((1.0, 0.7, 0.4)), 4), 0),
     "icosphere": (lambda t: t.creation.icosphere(4), 0),
     "uv-sphere": (lambda t: t.creation.uv_sphere(radius=0.7, count=[32, 32]), 0),  # poles where 32 slivers meet
     # 48 slivers from the apex to a sharp rim, the base a fan
     "cone": (lambda t: t.creation.cone(radius=0.5, height=1.0, sections=48), 0),
     # the box subdivided once: big faces, a cut takes whole ones
-    "box-coarse": (lambda t: _subdivided(t.creation.box((1.0, 0.7, 0.4)), 1), 0),
+    "box-coarse": (lambda t: gen.subdivided(t.creation.box((1.0, 0.7, 0.4)), 1), 0),
     # an octagonal prism: a side is two triangles, its edges 45 degrees sharp
     "prism-8": (lambda t: t.creation.cylinder(radius=0.5, height=1.0, sections=8), 0),
     # a fat tube (radii 1 and 0.6): the hole through it is small
@@ -64,10 +57,10 @@ TRIMESH = {
     "icosphere-80": (lambda t: t.creation.icosphere(1), 0),
     # profiles revolved about z (64 sections, subdivided twice): a vase with a narrow neck, and a
     # mushroom whose cap overhangs its stem
-    "vase": (lambda t: _subdivided(t.creation.revolve(
+    "vase": (lambda t: gen.subdivided(t.creation.revolve(
         [[0, 0], [0.5, 0], [0.6, 0.3], [0.55, 0.8], [0.2, 1.2], [0.18, 1.5], [0.3, 1.7], [0, 1.7]],
         sections=64), 2), 0),
-    "mushroom": (lambda t: _subdivided(t.creation.revolve(
+    "mushroom": (lambda t: gen.subdivided(t.creation.revolve(
         [[0, 0], [0.25, 0], [0.22, 0.8], [0.9, 0.85], [0.85, 1.05], [0.5, 1.3], [0, 1.35]], sections=64), 2), 0),
 }
 
