@@ -33,7 +33,8 @@ def test_through_sheet_when_the_line_enters_the_solid_at_both_ends():
     # 50 degrees off: not (cos 50 = 0.64)
     a = np.radians(50)
     assert not rf.through_sheet(_line([[0, 0, 0], [np.sin(a), 0, -np.cos(a)]]), {0: up, 1: down})
-    # between two faces that look the same way, a step apart (featuretype's cut through-hole wall):
+    # between two faces that look the same way, a step apart (featuretype cut by a slab: two walls
+    # facing -y, 0.09 apart):
     # the line enters one and leaves the other
     assert not rf.through_sheet(_line([[0, 0, 0], [0, 0, -0.1]]), {0: up, 1: up})
     # across a gap between two faces that look at each other (outside the solid at both ends)
