@@ -71,5 +71,5 @@ def test_a_folded_star_moves_along_the_plane_of_its_ring():
         if R._move_best(p, star, 6, R.corner_angles(p, star).min()):
             moved += 1
             worst = max(worst, abs(p[6, 2]))
-    assert moved > 150
+    assert moved > 120  # 160 before the guard against moves off the star's old faces (refine.ON_FACES)
     assert worst < 0.03  # along the normals' sum: 0.135
