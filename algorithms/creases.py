@@ -54,6 +54,7 @@ class CreaseEnds:
         if V is None:
             return out
         m, lim = len(polygon), np.cos(np.radians(along))
+        starts = {k for k, *_ in out}
         moved = []
         for k, d, n, c in out:
             k0 = prev = k
@@ -64,6 +65,8 @@ class CreaseEnds:
                 if not step:
                     break
                 prev, k = k, step[0]
+            if k != k0 and _curve_to(V, polygon, prev, k, lim, starts - {k0}):
+                continue  # the border goes on as the crease into another end: it is the crease already
             if polygon[k] != polygon[k0]:
                 self.moved.setdefault(int(polygon[k]), set()).add(int(polygon[k0]))
                 if c is None:  # it leaves where the border turned away: along the border's last edge
@@ -80,6 +83,25 @@ class CreaseEnds:
             table.pop(int(v), None)
         # the face planes stay: another edge of a corner may still be missing there (crease_line
         # does not follow a ray along which the border, e.g. this chain, already runs)
+
+
+def _curve_to(V: NDArray[np.float64], polygon: tuple[int, ...], prev: int, k: int, lim: float,
+              ends: set[int]) -> bool:
+    """Whether the border, walked on from polygon position k (arrived from ``prev``) with each edge
+    within acos(``lim``) of the one before, reaches one of the positions ``ends`` (another crease
+    end): a tessellated curve turns a little at every vertex (a subdivided 48-gon rim: walked
+    against the crease's first direction, the two ends of a hole along it stopped 12 degrees round,
+    and were joined by a chain bulging 5 % outside the rim)."""
+    m = len(polygon)
+    for _ in range(m):  # sequential: a walk
+        if k in ends:
+            return True
+        t = _unit(V[polygon[k]] - V[polygon[prev]])
+        nxt = (2 * k - prev) % m  # on along the border, the way the walk came
+        if float(t @ _unit(V[polygon[nxt]] - V[polygon[k]])) <= lim:
+            return False
+        prev, k = k, nxt
+    return False
 
 
 def _nones():
