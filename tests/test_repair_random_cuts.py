@@ -367,12 +367,15 @@ def test_a_fill_that_matches_its_border_is_not_refined_off_the_surface():
     assert point_to_surface(probes, truth.vertices, truth.faces).max() < 1e-9 * truth.bbox_diagonal()
 
 
-def test_a_region_the_global_fairing_throws_off_takes_a_fallback():
+def test_a_region_the_global_fairing_throws_off_takes_a_fallback(monkeypatch):
     """featuretype 8:1 (three balls and a slab, 100 free points), light mode: the sliver fills of the
     through-hole walls are kept unrefined (darning._fits_its_border), and next to them the
     cotangent U3 system of one 23-vertex fill region is ill-conditioned: it threw that region 45 %
     of the diagonal off (Hausdorff 47.5 %). Judged over every new vertex at once the result looked
-    plausible; judged per region against its own border (repair._fair_new), that region takes U2."""
+    plausible; judged per region against its own border (repair._fair_new), that region takes U2.
+    Since the fairing reads only the sheets its patches continue (darning/sheets.py), U3 keeps that
+    region near its hole; with every face read, as before, the fallback is still what does."""
+    import algorithms.darning.sheets as sheets
     from algorithms.metrics import point_to_surface
 
     part = Mesh(*load_raw(data_file("featuretype.stl")))
@@ -380,11 +383,15 @@ def test_a_region_the_global_fairing_throws_off_takes_a_fallback():
                                            (1292, 0.44232991887961065)],
                        ([0.1411014811888608, -0.2070464371071305, -0.8124196494173108], -0.839501228403475,
                         0.16899973910228563), 100, 8)
-    res = repair(model, RepairParams(field=FieldParams(mode="light")))
-    assert_input_kept(model, res.mesh, fragments=True)
-    off = point_to_surface(res.mesh.vertices, part.vertices, part.faces).max() / part.bbox_diagonal()
-    assert off < 0.05  # 0.45 judged over every new vertex at once
-    assert "U2 cotan (1 of" in res.fairing
+    for every_face in (False, True):
+        if every_face:
+            monkeypatch.setattr(sheets, "along_crease", lambda v, f, *a, **k: np.zeros(len(f), dtype=bool))
+            monkeypatch.setattr(sheets, "reached_sheets", lambda v, f, *a, **k: np.ones(len(f), dtype=bool))
+        res = repair(model, RepairParams(field=FieldParams(mode="light")))
+        assert_input_kept(model, res.mesh, fragments=True)
+        off = point_to_surface(res.mesh.vertices, part.vertices, part.faces).max() / part.bbox_diagonal()
+        assert off < 0.05  # 0.45 judged over every new vertex at once
+        assert ("U2 cotan (1 of" in res.fairing) == every_face, res.fairing
 
 
 def test_a_subdivided_rim_is_continued_along_the_rim():

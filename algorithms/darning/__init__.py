@@ -60,6 +60,7 @@ from .fair import ORDERS, WEIGHTINGS, fair, tangential_relax
 from .fan import fan
 from .liepa import WEIGHTS, triangulate
 from .refine import edge_scale, refine, relax
+from .sheets import sheet_system
 
 METHODS = ("fan", "liepa", "liepa-refine", "liepa-fair")
 DEFAULT_METHOD = "liepa-fair"
@@ -275,7 +276,8 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
          fairing: str = "U3", fair_weights: str = "cotan", fair_rounds: int = 2, smooth: int = 5,
          fair_iterations: int = 1,
          forbid_existing: bool = True, apart: NDArray[np.int64] | None = None,
-         edges: NDArray[np.int64] | None = None, join_copies: bool = True, keep_fitting: bool = False) -> Patch:
+         edges: NDArray[np.int64] | None = None, join_copies: bool = True, keep_fitting: bool = False,
+         judged: NDArray[np.bool_] | None = None, crease_angle: float = 180.0) -> Patch:
     """Fill the hole bounded by ``loop`` (vertex indices in the loop's positive direction).
 
     vertices (V, 3), faces (F, 3): the surface around the hole (never modified).
@@ -309,6 +311,10 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         The repair pipeline asks this of holes bounded by input vertices alone (a bridge chain on
         a hole's border still moves in its global fairing); off by default (the F-rep pipeline
         refines every fill and projects it onto the true surface).
+    judged, crease_angle: (F,) bool over ``faces`` (the input's faces; not those of earlier patches)
+        and degrees: the fairing reads only the smooth sheets its patch reaches, not the faces beyond
+        an edge between two judged faces sharper than ``crease_angle`` (sheets.py; 180, the default:
+        every face around the hole). A pinched loop's parts read every face.
     """
     _check(method, weight, fairing, fair_weights)
     v = np.asarray(vertices, dtype=np.float64)
@@ -332,7 +338,7 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
         return _darn_parts(v, f, lp, pairs, apart, dict(
             method=method, weight=weight, density=density, fairing=fairing, fair_weights=fair_weights,
             fair_rounds=fair_rounds, smooth=smooth, fair_iterations=fair_iterations, forbid_existing=forbid_existing,
-            keep_fitting=keep_fitting))
+            keep_fitting=keep_fitting, crease_angle=crease_angle), judged)
     ring = f[np.isin(f, lp).any(axis=1)]  # the fixed faces touching the hole border
     if apart is not None and len(apart):
         ap = np.asarray(apart, dtype=np.int64).reshape(-1, 3)
@@ -387,9 +393,11 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
     P, pf, splits, flips = r.vertices, r.faces, r.splits, r.flips
     # the fixed faces the fairing reads: L^k at a patch vertex reads L up to k-1 rings out, so U2
     # needs the faces around the loop, U3 also those around their vertices
-    around = ring
+    near = np.isin(f, lp).any(axis=1)  # ``ring``
     for _ in range(ORDERS[fairing] - 2):
-        around = f[np.isin(f, around).any(axis=1)]
+        near = np.isin(f, f[near]).any(axis=1)
+    around = f[near]
+    judged_around = None if judged is None or crease_angle >= 180 else np.asarray(judged, dtype=bool)[near]
     # vertices whose neighbourhood is incomplete in (around + patch): the far side of `around`, and
     # loop vertices on bridge chains whose other side is not filled yet (fair.py "bare")
     bare = np.unique(boundary_halfedges(np.vstack([around, patch_faces])))
@@ -404,7 +412,15 @@ def darn(vertices: NDArray[np.float64], faces: NDArray[np.int64], loop: NDArray[
                 splits += r.splits
                 flips += r.flips
             free = np.arange(nv, len(P))
-            faired = fair(P, np.vstack([around, pf]), free, operator=fairing, weights=fair_weights, bare=bare,
+            system, bare_k = np.vstack([around, pf]), bare
+            if judged_around is not None:  # the sheets the patch continues (sheets.py)
+                keep, _ = sheet_system(P, system, np.r_[judged_around, np.zeros(len(pf), dtype=bool)], free,
+                                       crease_angle, region=np.r_[np.zeros(len(around), dtype=bool),
+                                                                  np.ones(len(pf), dtype=bool)])
+                if not keep.all():
+                    system = system[keep]
+                    bare_k = np.unique(boundary_halfedges(system))
+            faired = fair(P, system, free, operator=fairing, weights=fair_weights, bare=bare_k,
                           iterations=fair_iterations)
             if not plausible(faired[free], v[lp]):
                 break  # a folded patch makes the system near-singular: keep the refined patch
@@ -441,11 +457,12 @@ def _fits_its_border(v: NDArray[np.float64], ring: NDArray[np.int64], faces: NDA
 
 
 def _darn_parts(v: NDArray[np.float64], f: NDArray[np.int64], lp: NDArray[np.int64], pairs: NDArray[np.int64],
-                apart: NDArray[np.int64] | None, options: dict) -> Patch:
+                apart: NDArray[np.int64] | None, options: dict, judged: NDArray[np.bool_] | None = None) -> Patch:
     """darn() of a pinched loop: each part (split_pinched) filled on the surface the parts before
     it completed, the copies renumbered; one Patch for all. A part that still passes a vertex twice
     (no cut may separate the passes: both are right) is filled with that vertex as two corners
-    (``_darn_corners``), or, if that doubles an edge, cut there after all."""
+    (``_darn_corners``, which reads every face), or, if that doubles an edge, cut there after all.
+    ``judged``: darn's, over ``f`` (the parts' patches are not judged)."""
     nv = len(v)
     cur_v, cur_f = v, merge_copies(f, pairs)
     ap = merge_copies(apart, pairs) if apart is not None and len(apart) else apart
@@ -460,7 +477,9 @@ def _darn_parts(v: NDArray[np.float64], f: NDArray[np.int64], lp: NDArray[np.int
                 continue
             cur_v, cur_f, s_, f_ = done
         else:
-            p = darn(cur_v, cur_f, part, apart=ap, **options)
+            jd = None if judged is None else np.r_[np.asarray(judged, dtype=bool),
+                                                   np.zeros(len(cur_f) - len(f), dtype=bool)]
+            p = darn(cur_v, cur_f, part, apart=ap, judged=jd, **options)
             cur_v, cur_f = apply_patch(cur_v, cur_f, p)
             s_, f_ = p.splits, p.flips
         splits += s_
