@@ -78,7 +78,7 @@ def _sweep_cut(name: str):
     return make_cut(model, int(seed), int(i))
 
 
-def test_the_angle_polish_keeps_its_points_on_the_surface_in_a_concave_corner():
+def test_the_angle_polish_keeps_its_points_on_the_surface_in_a_concave_corner(monkeypatch):
     """bench/sweep.py cut mushroom:5:0: a fill in the concave corner under the mushroom's cap. The
     polish moved two points in planes its sliver stars tilted, 0.10-0.11 into the cap (3.8 % of
     the diagonal); kept near their stars' old faces (refine.ON_FACES), the farthest new vertex is
@@ -90,6 +90,11 @@ def test_the_angle_polish_keeps_its_points_on_the_surface_in_a_concave_corner():
     n_in = len(model.mesh.vertices)
     err = point_to_surface(out.vertices[n_in:], case.truth.vertices, case.truth.faces)
     assert err.max() < 0.07, err.max()
+    monkeypatch.setattr(R, "ON_FACES", np.inf)  # the guards off: as before
+    monkeypatch.setattr(R, "RING_LINE", 0.0)
+    out = repair(model, RepairParams()).mesh
+    err = point_to_surface(out.vertices[n_in:], case.truth.vertices, case.truth.faces)
+    assert err.max() > 0.1, err.max()
 
 
 def test_a_hole_on_a_face_along_a_sharp_rim_continues_that_face(monkeypatch):
