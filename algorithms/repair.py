@@ -1376,7 +1376,6 @@ def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operat
     of them the patches continue (darning/sheets.py, with ``crease_angle``; 180 reads every face)."""
     from .darning import plausible_regions
     from .darning.fair import ORDERS, fair, free_regions
-    from .darning.sheets import sheet_system
 
     free = np.setdiff1d(np.arange(n_input, len(V)), keep_still if keep_still is not None else [])
     # L^k at a free vertex reads L at the vertices up to k-1 rings out, and L there reads their
@@ -1385,15 +1384,9 @@ def _fair_new(V: NDArray[np.float64], F: NDArray[np.int64], n_input: int, operat
     near[free] = True
     for _ in range(max(ORDERS.values()) - 1):
         near[F[near[F].any(axis=1)].ravel()] = True
-    rows = near[F].any(axis=1)
-    judged = np.arange(len(F))[rows] < n_before  # the input's faces (sheets.py judges their edges)
-    beyond = _ring_beyond(F, rows, n_before)
-    F = F[rows]
     if not len(free):
         return V, "none (no vertex to fair)"
-    keep, bare = sheet_system(V, F, judged, free, crease_angle, region=~judged, context=beyond[0],
-                              context_judged=beyond[1])
-    F = F[keep]
+    F, bare = _sheet_faces(V, F, near[F].any(axis=1), n_before, free, crease_angle)
     label, _ = free_regions(V, free, F)
     region = np.full(len(V), -1, dtype=np.int64)
     region[free] = label
@@ -1467,7 +1460,6 @@ def _fair_sides(V: NDArray[np.float64], F: NDArray[np.int64], n_before: int, n_i
     of the input it continues (darning/sheets.py, with ``crease_angle``; 180 reads every face)."""
     from .darning import plausible
     from .darning.fair import fair
-    from .darning.sheets import sheet_system
 
     side = _crease_sides(F[n_before:], len(V), locked)
     out = V.copy()
@@ -1482,13 +1474,7 @@ def _fair_sides(V: NDArray[np.float64], F: NDArray[np.int64], n_before: int, n_i
         near[free] = True
         for _ in range(2):
             near[sys_f[near[sys_f].any(axis=1)].ravel()] = True
-        rows = near[sys_f].any(axis=1)
-        judged = np.arange(len(sys_f))[rows] < n_before
-        beyond = _ring_beyond(sys_f, rows, n_before)
-        sys_f = sys_f[rows]
-        keep, cut = sheet_system(out, sys_f, judged, free, crease_angle, region=~judged,  # darning/sheets.py
-                                 context=beyond[0], context_judged=beyond[1])
-        sys_f = sys_f[keep]
+        sys_f, cut = _sheet_faces(out, sys_f, near[sys_f].any(axis=1), n_before, free, crease_angle)
         bare = np.union1d(np.intersect1d(np.unique(faces), crease), cut)
         # judged against the side's border (the vertices of the faces touching its free vertices),
         # within a quarter of its diameter
@@ -1505,23 +1491,30 @@ def _fair_sides(V: NDArray[np.float64], F: NDArray[np.int64], n_before: int, n_i
     return out, used
 
 
-def _ring_beyond(F: NDArray[np.int64], rows: NDArray[np.bool_], n_before: int
-                 ) -> tuple[NDArray[np.int64], NDArray[np.bool_]]:
-    """The faces around a fairing system (``rows``: (F,) bool, the faces of ``F`` in it; the first
-    ``n_before`` faces are the input's) that sheets.sheet_system reads as its context: the new faces
-    not in it (the whole of each patch border) and the input faces within two rings beyond it
-    (where a sharp edge arrives at a patch border, also where the system's own rings stop short of
-    it: a fill face of three border vertices has no free vertex to reach out from). Returns (faces,
-    which are input faces)."""
+def _sheet_faces(V: NDArray[np.float64], F: NDArray[np.int64], rows: NDArray[np.bool_], n_before: int,
+                 free: NDArray[np.int64], crease_angle: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The faces of a fairing system (``rows``: (F,) bool, the faces of ``F`` it reads; the first
+    ``n_before`` are the input's) on the smooth sheets its patches continue (darning/sheets.py), and
+    the vertices left bare. The sheets also read, as context, the new faces not in the system (the
+    whole of each patch border) and the input faces within two rings beyond it (where a sharp edge
+    arrives at a patch border, also where the system's own rings stop short of it: a fill face of
+    three border vertices has no free vertex to reach out from)."""
+    from .darning.sheets import sheet_system
+
     reach = np.zeros(int(F.max(initial=-1)) + 1, dtype=bool)
     reach[F[rows].ravel()] = True
     reach[F[n_before:].ravel()] = True
     F_in = F[:n_before]
-    for _ in range(2):
-        reach[F_in[reach[F_in].any(axis=1)].ravel()] = True
-    beyond = F_in[~rows[:n_before] & reach[F_in].any(axis=1)]
+    if crease_angle < 180:
+        for _ in range(2):
+            reach[F_in[reach[F_in].any(axis=1)].ravel()] = True
+    beyond = F_in[~rows[:n_before] & reach[F_in].any(axis=1)] if crease_angle < 180 else F_in[:0]
     new = F[n_before:][~rows[n_before:]]
-    return np.vstack([beyond, new]), np.r_[np.ones(len(beyond), dtype=bool), np.zeros(len(new), dtype=bool)]
+    judged = np.flatnonzero(rows) < n_before
+    keep, bare = sheet_system(V, F[rows], judged, free, crease_angle, region=~judged,
+                              context=np.vstack([beyond, new]),
+                              context_judged=np.r_[np.ones(len(beyond), dtype=bool), np.zeros(len(new), dtype=bool)])
+    return F[rows][keep], bare
 
 
 def _flat_stars(V: NDArray[np.float64], F: NDArray[np.int64], which: NDArray[np.int64],

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..bridge_graph import segment_distance
 from ..topology import VertexFaces, edge_table, face_adjacency, halfedges
 from .flips import edge_keys_among, flip_passes
 from .refine_kernels import corner_angles as _corner_angles
@@ -952,8 +953,5 @@ def _off_faces(x: NDArray[np.float64], t: NDArray[np.float64]) -> float:
     for u, w in ((a, b), (b, c), (c, a)):
         inside &= np.einsum("ij,ij->i", _cross(w - u, q - u), n) >= 0
     best = np.abs(h[inside]) * np.sqrt(nn[inside]) if inside.any() else np.zeros(0)
-    for u, w in ((a, b), (b, c), (c, a)):
-        e = w - u
-        s = np.clip(np.einsum("ij,ij->i", x - u, e) / np.maximum(np.einsum("ij,ij->i", e, e), 1e-300), 0.0, 1.0)
-        best = np.r_[best, np.linalg.norm(x - (u + s[:, None] * e), axis=1)]
-    return float(best.min())
+    edges = segment_distance(np.vstack([a, b, c]), np.vstack([b, c, a]), x, x)  # x as a point segment
+    return float(np.r_[best, edges].min())

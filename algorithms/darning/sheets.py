@@ -27,6 +27,8 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from ..topology import boundary_loops, face_adjacency
+
 ALONG = 30.0  # degrees: a stretch of border goes on along a crease (along_crease)
 ON_CURVE = 0.02  # of its chord: the stretch lies on the crease's continuation (along_crease)
 
@@ -35,18 +37,6 @@ def _normals(vertices: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.
     t = np.asarray(vertices, dtype=np.float64)[f]
     n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     return n / np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
-
-
-def _face_pairs(f: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
-    """(a, b, edge code): the two faces of each shared edge (three faces on a non-manifold edge: two
-    pairs); code = lo * V + hi of the edge's vertices."""
-    e = np.sort(np.stack([f, np.roll(f, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
-    nv = int(f.max()) + 1
-    code = e[:, 0] * nv + e[:, 1]
-    order = np.argsort(code, kind="stable")
-    c, face = code[order], np.repeat(np.arange(len(f)), 3)[order]
-    pair = c[1:] == c[:-1]
-    return face[:-1][pair], face[1:][pair], c[1:][pair]
 
 
 def reached_sheets(vertices: NDArray[np.float64], faces: NDArray[np.int64], judged: NDArray[np.bool_],
@@ -60,7 +50,7 @@ def reached_sheets(vertices: NDArray[np.float64], faces: NDArray[np.int64], judg
         return np.ones(len(f), dtype=bool)
     judged = np.asarray(judged, dtype=bool)
     n = _normals(vertices, f)
-    a, b, _ = _face_pairs(f)
+    a, b = face_adjacency(f, manifold_only=False).T
     ok = ~(judged[a] & judged[b]) | (np.einsum("ij,ij->i", n[a], n[b]) >= np.cos(np.radians(crease_angle)))
     label = _components(len(f), a[ok], b[ok])
     return np.isin(label, np.unique(label[seed]))
@@ -90,8 +80,6 @@ def along_crease(vertices: NDArray[np.float64], faces: NDArray[np.int64], judged
     whose stretches do so, on a border that has another sheet's stretch too, is returned. A crease
     that crosses the hole arrives at an angle to the border (creases.py joins its two ends by a
     chain instead)."""
-    from ..topology import boundary_loops
-
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     judged = np.asarray(judged, dtype=bool)
     out = np.zeros(len(f), dtype=bool)
@@ -100,14 +88,14 @@ def along_crease(vertices: NDArray[np.float64], faces: NDArray[np.int64], judged
         return out
     V = np.asarray(vertices, dtype=np.float64)
     n = _normals(V, f)
-    a, b, code = _face_pairs(f)
+    pairs, edge = face_adjacency(f, manifold_only=False, with_edges=True)
+    a, b = pairs.T
     both = judged[a] & judged[b]
     smooth = np.einsum("ij,ij->i", n[a], n[b]) >= np.cos(np.radians(crease_angle))
     sheet = _components(len(f), a[both & smooth], b[both & smooth])
     nv = int(f.max()) + 1
     sharp: dict[int, list[int]] = {}  # vertex -> the other ends of its sharp edges between judged faces
-    for c in np.unique(code[both & ~smooth]).tolist():
-        lo, hi = divmod(c, nv)
+    for lo, hi in np.unique(edge[both & ~smooth], axis=0).tolist():
         sharp.setdefault(lo, []).append(hi)
         sharp.setdefault(hi, []).append(lo)
     # the judged face across each border half-edge (a -> b of a region face: b -> a of the face beyond)
@@ -166,6 +154,7 @@ def _near_curve(V: NDArray[np.float64], t0: int, d0: NDArray[np.float64], t1: in
                 idx: list[int], tol: float) -> bool:
     """Whether the vertices ``idx`` lie within ``tol`` of the chord |t1 - t0| from the cubic Hermite
     curve from t0 (tangent d0) to t1 (tangent d1), the way creases.py continues a crease."""
+    from ..bridge_graph import segment_distance
     from ..creases import hermite
 
     L = float(np.linalg.norm(V[t1] - V[t0]))
@@ -174,12 +163,8 @@ def _near_curve(V: NDArray[np.float64], t0: int, d0: NDArray[np.float64], t1: in
     curve = np.vstack([V[t0], hermite(V[t0], d0, V[t1], d1, L / 64), V[t1]])
     if not idx:
         return True
-    a, b = curve[:-1], curve[1:]
-    q = V[np.asarray(idx)][:, None, :]
-    ab = b - a
-    s = np.clip(np.einsum("kid,id->ki", q - a, ab) / np.maximum(np.einsum("id,id->i", ab, ab), 1e-300), 0.0, 1.0)
-    dist = np.linalg.norm(q - (a + s[..., None] * ab), axis=2).min(axis=1)
-    return bool(dist.max() <= tol * L)
+    q = V[np.asarray(idx)][:, None, :]  # each point against every segment of the curve
+    return bool(segment_distance(curve[:-1], curve[1:], q, q).min(axis=1).max() <= tol * L)
 
 
 def sheet_system(vertices: NDArray[np.float64], faces: NDArray[np.int64], judged: NDArray[np.bool_],
