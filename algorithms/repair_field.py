@@ -248,15 +248,18 @@ def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RI
     return out
 
 
-def _between(frames: list[LoopFrame], geo: dict, a: int, b: int) -> bool:
+def _between(frames: list[LoopFrame], geo: dict, a: int, b: int, *, rim: float = RIM) -> bool:
     """Whether another loop lies in the gap between loops a and b: its centroid projects onto the
     segment between theirs, within the larger of their mean radii of it (the two rims of a band of
-    the same tube, between the rims of two pieces that face each other across it)."""
+    the same tube, between the rims of two pieces that face each other across it). Only a rim
+    (``rim_axis``: mean |n . N| below ``rim``) counts: a band's loops are rims; a fragment of the
+    wall left in the gap (a face or two the cut spared: trefoil:9:1 of bench/sweep.py, a loop of 4
+    vertices lying flat on the tube, mean |n . N| 0.99) is no band and does not part the rims."""
     ca, cb = geo[a][0], geo[b][0]
     d = cb - ca
     reach = max(loop_radius(frames[a]), loop_radius(frames[b]))
     for k, fr in enumerate(frames):
-        if k in (a, b):
+        if k in (a, b) or (geo[k] if k in geo else rim_axis(fr))[2] >= rim:
             continue
         c = fr.points.mean(axis=0)
         t = float((c - ca) @ d) / float(d @ d)

@@ -635,3 +635,23 @@ def test_a_fragment_hanging_at_another_fragment_is_not_closed_on_itself():
                        free_points=100, seed=8)
     assert len(model.set_aside) == 4
     closed_repair(model, genus=1)
+
+
+def test_a_wall_fragment_in_the_gap_does_not_part_two_facing_rims(monkeypatch):
+    """bench/sweep.py cut trefoil:9:1: the knot in five pieces; two of them end in rims facing each
+    other across a ball's gap (mean b . u 0.82 and 0.87), and two faces the ball spared lie in the
+    gap, a loop of 4 vertices flat on the tube (mean |n . N| 0.99). Counted as a band of the tube
+    between the rims (repair_field._between), it parted them: nothing joined the two ends and the
+    knot came back capped, genus 0. Only rims count as a band's loops now."""
+    import functools
+
+    import algorithms.repair_field as rf
+    from bench.sweep import make_cut
+
+    case = make_cut("trefoil", 9, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=1)
+    assert "loops 10 and 11: facing rims of a tube across islands, joined along it" in res.tunnel_note
+    monkeypatch.setattr(rf, "_between", functools.partial(rf._between, rim=np.inf))  # every loop counts
+    out = repair(model, RepairParams())
+    assert topology(out.mesh.faces).genus == 0
