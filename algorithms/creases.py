@@ -134,6 +134,26 @@ def circumcircle(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.f
     return Circle(center, float(np.linalg.norm(center - a)), n / np.sqrt(nn))
 
 
+def fit_circle(points: NDArray[np.float64]) -> Circle | None:
+    """The least-squares circle of points (N >= 3): in their least-squares plane, the algebraic fit
+    x^2 + y^2 + D x + E y + F = 0 (Kasa); None when they are (nearly) collinear."""
+    from .holes import best_fit_plane
+
+    c, n = best_fit_plane(points)
+    e1 = _unit(points[-1] - points[0] - ((points[-1] - points[0]) @ n) * n)
+    e2 = np.cross(n, e1)
+    q = points - c
+    x, y = q @ e1, q @ e2
+    A = np.stack([x, y, np.ones_like(x)], axis=1)
+    sol, *_ = np.linalg.lstsq(A, -(x * x + y * y), rcond=None)
+    cx, cy = -sol[0] / 2, -sol[1] / 2
+    r2 = cx * cx + cy * cy - sol[2]
+    span = float(np.linalg.norm(points[-1] - points[0]))
+    if not np.isfinite(r2) or r2 <= 0 or np.sqrt(r2) > 1e6 * max(span, 1e-300):
+        return None
+    return Circle(c + cx * e1 + cy * e2, float(np.sqrt(r2)), n)
+
+
 def _unit(a: NDArray[np.float64]) -> NDArray[np.float64]:
     n = float(np.linalg.norm(a))
     return a / n if n > 0 else a
@@ -175,8 +195,13 @@ def _blocking(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> tuple[
     return f.ravel(), np.repeat(fn, 3, axis=0)
 
 
+# crease_ends: a curved crease's circle is fitted to its longest stretch of LONG_FIT points or more
+# (up to ``run`` edges back from its end) that one circle fits within FIT of its radius
+LONG_FIT, FIT = 6, 0.005
+
+
 def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: float, *,
-                corner: float = 0.5, min_bend: float = 3.0, max_bend: float = 40.0) -> CreaseEnds:
+                corner: float = 0.5, min_bend: float = 3.0, max_bend: float = 40.0, run: int = 32) -> CreaseEnds:
     """The crease ends of the sharp input edges (``sharp_edges``): at each end vertex, the edge's
     direction going on past it.
 
@@ -185,8 +210,13 @@ def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: 
       the hole all contain d, so their normals are across it), a third surface closes the crease
       there, and the vertex gives no crease end for it.
     - A curved crease (the sharp edge before it turns by ``min_bend`` to ``max_bend`` degrees, and
-      the edge before that, where there is one, lies on the same circle) carries the circle through
-      its last three vertices: it is continued along that circle, never straight.
+      the edge before that, where there is one, lies on the same circle) carries a circle: it is
+      continued along that circle, never straight. The circle is the one through its last three
+      vertices, unless a longer stretch of the crease (LONG_FIT points or more, up to ``run``
+      edges back) lies on one circle within FIT of its radius: then that one. Three points alone
+      read the noise of a finely tessellated rim: the mushroom's 256-gon stem rim of bench/sweep.py
+      (1.4 degrees an edge, points off the circle by 1e-3 of its radius) gave circles a quarter its
+      size, and the two ends of one arc of the fandisk's 0.69 circle read radii 0.52 and 0.77.
     - ``planes``: the distinct face normals at every vertex; ``edges``: the normal pairs of every
       sharp edge at a vertex (corners included), to find edges a hole removed whole.
     """
@@ -227,6 +257,24 @@ def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: 
         if abs(float(np.linalg.norm(vertices[t] - c.center)) - c.radius) > 0.02 * c.radius \
                 or abs(float((vertices[t] - c.center) @ c.axis)) > 0.02 * c.radius:
             return None
+        # the same crease further back (up to ``run`` edges, each turning by at most max_bend): the
+        # longest stretch of at least LONG_FIT points that one circle (their least-squares circle)
+        # fits within FIT of its radius gives the circle instead
+        chain = [v, w, u, t]
+        while len(chain) <= run:
+            x = before(chain[-1], chain[-2])
+            if x is None or x in chain:
+                break
+            chain.append(x)
+        for n in range(len(chain), LONG_FIT - 1, -1):
+            p = vertices[chain[:n]]
+            fit = fit_circle(p)
+            if fit is None:
+                continue
+            off = max(np.abs(np.linalg.norm(p - fit.center, axis=1) - fit.radius).max(),
+                      np.abs((p - fit.center) @ fit.axis).max())
+            if off <= FIT * fit.radius:
+                return fit
         return c
 
     # only vertices on the surface's border can be crease ends (a hole interrupts the crease there)

@@ -239,3 +239,41 @@ def test_surface_touched_by_a_chain_through_an_input_vertex():
     assert not s.touched_by(p0, np.array([[1.0, 0.0, 0.5]]), p1, 1e-3)  # over the vertex, 0.5 above it
     assert not s.touched_by(V[0], np.zeros((0, 3)), V[3], 1e-3)  # its own ends do not count
     assert not s.crossed_by(p0, np.array([[0.5, 0, 0], [1.5, 0, 0]]), p1, 1e-3, 0.1)  # on edges: no face's inside
+
+
+def _noisy_rim_cylinder(sections: int, noise: float, seed: int = 0):
+    """A closed cylinder (radius 1, height 1, ``sections`` sides) whose top-rim points sit off the
+    circle radially by up to ``noise`` (of the radius), with a notch of three side faces and their
+    cap faces cut out at the rim: (vertices, faces, the notch's border vertices on the rim)."""
+    cyl = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=sections)
+    V = np.asarray(cyl.vertices, dtype=np.float64).copy()
+    F = np.asarray(cyl.faces, dtype=np.int64)
+    top = np.flatnonzero((np.abs(V[:, 2] - 0.5) < 1e-9) & (np.hypot(V[:, 0], V[:, 1]) > 0.5))
+    rng = np.random.default_rng(seed)
+    V[top, :2] *= (1.0 + rng.uniform(-noise, noise, len(top)))[:, None]
+    cen = V[F].mean(axis=1)
+    ang = np.arctan2(cen[:, 1], cen[:, 0])
+    notch = (np.abs(ang) < 2.5 * 2 * np.pi / sections) & (cen[:, 2] > -0.2)
+    return V, F[~notch], top
+
+
+def test_a_fine_noisy_rim_gives_its_ends_the_rim_s_circle():
+    """A 256-gon rim, 1.4 degrees an edge, points off the circle by up to 1e-3 of the radius (as the
+    mushroom's stem rim of bench/sweep.py): the circle through the last three vertices of the crease
+    reads the noise (radii from a quarter of the rim's to several times it); the circle fitted to
+    the crease's longer stretch (creases.LONG_FIT) is the rim's, to a percent."""
+    import algorithms.creases as cr
+
+    V, F, top = _noisy_rim_cylinder(256, 1e-3)
+    ends = crease_ends(V, F, 40.0)
+    radii = [c.radius for v in top for c in ends.circles.get(int(v), []) if c is not None]
+    assert len(radii) == 2  # the two ends of the notch's rim
+    assert all(abs(r - 1.0) < 0.01 for r in radii), radii
+    old = cr.LONG_FIT
+    try:
+        cr.LONG_FIT = 10**6  # three points only, as before
+        ends3 = crease_ends(V, F, 40.0)
+    finally:
+        cr.LONG_FIT = old
+    radii3 = [c.radius for v in top for c in ends3.circles.get(int(v), []) if c is not None]
+    assert not radii3 or max(abs(r - 1.0) for r in radii3) > 0.1, radii3
