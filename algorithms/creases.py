@@ -144,6 +144,8 @@ def fit_circle(points: NDArray[np.float64]) -> Circle | None:
     e2 = np.cross(n, e1)
     q = points - c
     x, y = q @ e1, q @ e2
+    if np.ptp(y) <= 1e-9 * max(float(np.ptp(x)), 1e-300):
+        return None  # collinear: no plane, no circle
     A = np.stack([x, y, np.ones_like(x)], axis=1)
     sol, *_ = np.linalg.lstsq(A, -(x * x + y * y), rcond=None)
     cx, cy = -sol[0] / 2, -sol[1] / 2

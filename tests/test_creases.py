@@ -277,3 +277,21 @@ def test_a_fine_noisy_rim_gives_its_ends_the_rim_s_circle():
         cr.LONG_FIT = old
     radii3 = [c.radius for v in top for c in ends3.circles.get(int(v), []) if c is not None]
     assert not radii3 or max(abs(r - 1.0) for r in radii3) > 0.1, radii3
+
+
+def test_fit_circle_recovers_a_tilted_circle_and_refuses_a_line():
+    from algorithms.creases import fit_circle
+
+    rng = np.random.default_rng(2)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    e1 = np.cross(axis, [1.0, 0.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(axis, e1)
+    centre, r = np.array([0.3, -1.2, 2.0]), 0.7
+    t = np.linspace(0.2, 1.1, 9)  # an arc of 52 degrees
+    p = centre + r * (np.cos(t)[:, None] * e1 + np.sin(t)[:, None] * e2)
+    c = fit_circle(p)
+    assert np.allclose(c.center, centre, atol=1e-9) and abs(c.radius - r) < 1e-9
+    assert abs(abs(float(c.axis @ axis)) - 1.0) < 1e-12
+    assert fit_circle(np.outer(np.linspace(0, 1, 7), [1.0, 2.0, 3.0])) is None  # collinear
