@@ -580,17 +580,8 @@ def _ends(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, ma
     return out
 
 
-def _convex(p: NDArray[np.float64], normals: NDArray[np.float64], c: Circle) -> bool:
-    """Whether the crease through p on circle c is a convex rim: of the two face normals along it,
-    the wall's (the one most across the axis) points away from the centre."""
-    r = p - c.center
-    r = r - (r @ c.axis) * c.axis
-    wall = normals[int(np.argmin(np.abs(normals @ c.axis)))]
-    return bool(wall @ r > 0)
-
-
 def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseEnds, spacing: float, *,
-                 max_turn: float = 25.0, max_normal_turn: float = 40.0, arcs: bool | str = False,
+                 max_turn: float = 25.0, max_normal_turn: float = 40.0, arcs: bool = False,
                  valid: Valid | None = None) -> CreaseSplit | None:
     """The best crease chain across the hole ``polygon``, or None.
 
@@ -600,11 +591,8 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
     two at j (within ``max_normal_turn`` degrees: the same two surfaces meet there); the best pair
     (largest d_i . u - d_j . u) is returned. Two curved ends (``Circle``) pair when they lie on one
     circle and the arc from i along d_i arrives at j along -d_j (within ``max_turn``); they are
-    joined along the arc (quality 2) when ``arcs`` is on (off by default: the band between two
-    arcs of one cylinder, e.g. a pocket's rim and floor, is then darned across the pocket's
-    opening by the minimum-area triangulation), or, with ``arcs="convex"``, when the circle is a
-    convex rim (the wall at both ends faces away from the centre: a cylinder's or a boss's edge,
-    not a pocket's). Otherwise a curved end goes on along its tangent.
+    joined along the arc (quality 2) when ``arcs`` is on (the pipeline's choice, repair.py), else
+    not at all. Otherwise a curved end goes on along its tangent.
     ``valid(i, j, points)``: a chain it refuses (e.g. one that runs over the input surface,
     ``Surface``) is not taken; the next best pair is.
     """
@@ -622,8 +610,6 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
                 continue
             if arcs and ci is not None and cj is not None and ci.same(cj):
                 if _shared(ni, nj, nlim) < 1:
-                    continue
-                if arcs == "convex" and not (_convex(V[polygon[i]], ni, ci) and _convex(V[polygon[j]], nj, cj)):
                     continue
                 got = arc(V[polygon[i]], di, V[polygon[j]], ci, spacing)
                 if got is None or float(got[1] @ -dj) < lim:

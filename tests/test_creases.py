@@ -214,20 +214,6 @@ def test_spaced_chain_keeps_the_leads_and_the_even_spacing():
     assert len(one) == 1 and np.isclose(one[0, 0], 0.25 * 0.744)
 
 
-def test_convex_rim_versus_pocket():
-    """crease_split(arcs="convex") joins the arc of a rim whose wall faces away from the circle's
-    centre (a cylinder's edge), not of a pocket's rim (its wall faces the centre)."""
-    from algorithms.creases import _convex
-
-    c = Circle(np.zeros(3), 1.0, np.array([0.0, 0.0, 1.0]))
-    p = np.array([0.6, 0.8, 0.0])
-    top = np.array([0.0, 0.0, 1.0])
-    radial = np.array([0.6, 0.8, 0.0])
-    assert _convex(p, np.stack([top, radial]), c)  # a cylinder's top edge: wall outward
-    assert not _convex(p, np.stack([top, -radial]), c)  # a pocket's rim: wall towards the axis
-    assert _convex(p, np.stack([radial, -top]), c)  # the bottom edge, normals in the other order
-
-
 def test_surface_touched_by_a_chain_through_an_input_vertex():
     from algorithms.creases import Surface
 

@@ -83,8 +83,8 @@ def test_cylinder_cups_with_a_rim_hole_get_no_handle():
     # the band's fills between the bridges: the cotangent U3 system bulged them 0.13 out of a band
     # 0.1 tall (the prism's facets are flat, its curvature sits on 64 vertical lines)
     assert off[band].max() < 0.02, off[band].max()
-    # the hole at the rim: its crease, an arc of a convex rim, is continued along the circle
-    # (creases.crease_split, arcs="convex"); without, the fill rounded the corner off 0.2 out
+    # the hole at the rim: its crease, an arc of the rim, is continued along the circle
+    # (creases.crease_split, arcs=True); without, the fill rounded the corner off 0.2 out
     # (MeshLib's is 0.18 off)
     assert any(h.note == "a sharp crease continued" for h in res.holes)
     assert off.max() < 0.12, off.max()
