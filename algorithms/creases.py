@@ -200,6 +200,10 @@ def _blocking(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> tuple[
 # crease_ends: a curved crease's circle is fitted to its longest stretch of LONG_FIT points or more
 # (up to ``run`` edges back from its end) that one circle fits within FIT of its radius
 LONG_FIT, FIT = 6, 0.005
+# crease_split: an arc longer than this (degrees) is the long way round: two ends of a fillet whose
+# short arc is still there, each continuing its circle into the hole (featuretype, sweep cut 8:1
+# light: a 270 degree arc round a pocket's corner fillet, 3.5 -> 10.5 % of the diagonal)
+MAX_ARC = 180.0
 
 
 def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: float, *,
@@ -614,6 +618,9 @@ def crease_split(V: NDArray[np.float64], polygon: tuple[int, ...], ends: CreaseE
                 got = arc(V[polygon[i]], di, V[polygon[j]], ci, spacing)
                 if got is None or float(got[1] @ -dj) < lim:
                     continue
+                path = np.vstack([V[polygon[i]], got[0], V[polygon[j]]])
+                if float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum()) > np.radians(MAX_ARC) * ci.radius:
+                    continue  # the long way round
                 found.append((2.0 + float(got[1] @ -dj), i, j, got[0]))
                 continue
             if _shared(ni, nj, nlim) < 2:
