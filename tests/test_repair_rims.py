@@ -161,3 +161,22 @@ def test_a_fine_rim_half_cut_away_is_read_as_its_circle(monkeypatch):
     out = repair(model, RepairParams()).mesh
     d = distances(out.vertices, out.faces, case.truth.vertices, case.truth.faces)
     assert d.hausdorff > 0.06, d.hausdorff
+
+
+def test_a_fillet_s_two_ends_are_not_joined_the_long_way_round(monkeypatch):
+    """bench/sweep.py cut featuretype:8:1 (light mode): the two ends of a pocket corner's fillet
+    arc, whose short arc the cut left, each continue the fillet's circle into the hole; with every
+    arc joined (concave ones too), the chain ran 270 degrees round the circle, off the part: 10.5 %
+    of the diagonal. No arc longer than half its circle (creases.MAX_ARC): 3.6 %."""
+    import algorithms.creases as C
+
+    case = _sweep_cut("featuretype:8:1")
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    out = repair(model, RepairParams()).mesh
+    assert_input_kept(model, out)
+    d = distances(out.vertices, out.faces, case.truth.vertices, case.truth.faces)
+    assert d.hausdorff < 0.045, d.hausdorff
+    monkeypatch.setattr(C, "MAX_ARC", 360.0)
+    out = repair(model, RepairParams()).mesh
+    d = distances(out.vertices, out.faces, case.truth.vertices, case.truth.faces)
+    assert d.hausdorff > 0.08, d.hausdorff
