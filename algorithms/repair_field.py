@@ -230,7 +230,7 @@ def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RI
     pairs, all two rims of one removed region (none across a long gap in the sweep's cuts; the
     tests cut a thin torus into two).
     """
-    geo = {k: rim_axis(frames[k]) for k in loop_ids}
+    geo = {k: rim_axis(f) for k, f in enumerate(frames)}  # every loop: _between reads the others too
     steep = [k for k in loop_ids if geo[k][2] < rim]  # the pairs among these only
     out: set[tuple[int, int]] = set()
     for i, a in enumerate(steep):
@@ -249,9 +249,10 @@ def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RI
 
 
 def _between(frames: list[LoopFrame], geo: dict, a: int, b: int, *, rim: float = RIM) -> bool:
-    """Whether another loop lies in the gap between loops a and b: its centroid projects onto the
-    segment between theirs, within the larger of their mean radii of it (the two rims of a band of
-    the same tube, between the rims of two pieces that face each other across it). Only a rim
+    """Whether another loop lies in the gap between loops a and b (``geo``: ``rim_axis`` of every
+    loop of ``frames``): its centroid projects onto the segment between theirs, within the larger
+    of their mean radii of it (the two rims of a band of the same tube, between the rims of two
+    pieces that face each other across it). Only a rim
     (``rim_axis``: mean |n . N| below ``rim``) counts: a band's loops are rims; a fragment of the
     wall left in the gap (a face or two the cut spared: trefoil:9:1 of bench/sweep.py, a loop of 4
     vertices lying flat on the tube, mean |n . N| 0.99) is no band and does not part the rims."""
@@ -259,7 +260,7 @@ def _between(frames: list[LoopFrame], geo: dict, a: int, b: int, *, rim: float =
     d = cb - ca
     reach = max(loop_radius(frames[a]), loop_radius(frames[b]))
     for k, fr in enumerate(frames):
-        if k in (a, b) or (geo[k] if k in geo else rim_axis(fr))[2] >= rim:
+        if k in (a, b) or geo[k][2] >= rim:
             continue
         c = fr.points.mean(axis=0)
         t = float((c - ca) @ d) / float(d @ d)
