@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .bridge_graph import resample_chain, segment_distance
+from .holes import best_fit_plane
 from .topology import edge_table, face_adjacency
 
 
@@ -137,8 +138,6 @@ def circumcircle(a: NDArray[np.float64], b: NDArray[np.float64], c: NDArray[np.f
 def fit_circle(points: NDArray[np.float64]) -> Circle | None:
     """The least-squares circle of points (N >= 3): in their least-squares plane, the algebraic fit
     x^2 + y^2 + D x + E y + F = 0 (Kasa); None when they are (nearly) collinear."""
-    from .holes import best_fit_plane
-
     c, n = best_fit_plane(points)
     e1 = _unit(points[-1] - points[0] - ((points[-1] - points[0]) @ n) * n)
     e2 = np.cross(n, e1)

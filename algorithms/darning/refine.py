@@ -939,14 +939,14 @@ def _move_best(p: NDArray[np.float64], star: NDArray[np.int64], c: int, before: 
     x = grid_search(t, at, p[c], half, e1, e2, n_old, before + gain, grid, levels)
     if np.isnan(x[0]):
         return False  # nothing better
-    old = p[c].copy()
-    p[c] = _nearest_on(t, x) if ON_STAR else x
-    if ON_STAR:  # on the star's old faces: better there too, and folding nothing
-        q = p[star]
-        n_new = _cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0])
-        if (np.einsum("ij,ij->i", n_new, n_old) <= 0).any() or corner_angles(p, star).min() < before + gain:
-            p[c] = old
-            return False
+    old, p[c] = p[c].copy(), _nearest_on(t, x) if ON_STAR else x
+    if not ON_STAR:
+        return True
+    q = p[star]  # on the star's old faces: better there too, and folding nothing
+    n_new = _cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0])
+    if (np.einsum("ij,ij->i", n_new, n_old) <= 0).any() or corner_angles(p, star).min() < before + gain:
+        p[c] = old
+        return False
     return True
 
 
