@@ -98,15 +98,24 @@ def along_crease(vertices: NDArray[np.float64], faces: NDArray[np.int64], judged
     for lo, hi in np.unique(edge[both & ~smooth], axis=0).tolist():
         sharp.setdefault(lo, []).append(hi)
         sharp.setdefault(hi, []).append(lo)
-    # the judged face across each border half-edge (a -> b of a region face: b -> a of the face beyond)
+    # the judged face across each border half-edge (a -> b of a region face: b -> a of the face beyond),
+    # looked up in the judged faces' half-edges sorted by key
     jf = np.flatnonzero(judged)
     he = np.stack([f[jf], np.roll(f[jf], -1, axis=1)], axis=2).reshape(-1, 2)
-    across = dict(zip((he[:, 0] * nv + he[:, 1]).tolist(), np.repeat(jf, 3).tolist()))
+    keys = he[:, 0] * nv + he[:, 1]
+    order = np.argsort(keys, kind="stable")
+    keys, owner = keys[order], np.repeat(jf, 3)[order]
+
+    def sheets_across(loop: NDArray[np.int64]) -> NDArray[np.int64]:
+        q = np.roll(loop, -1) * nv + loop
+        i = np.minimum(np.searchsorted(keys, q), max(len(keys) - 1, 0))
+        hit = keys[i] == q if len(keys) else np.zeros(len(q), dtype=bool)
+        return np.where(hit, sheet[owner[i]] if len(keys) else -1, -1)
+
     stretches: dict[int, list[bool]] = {}  # sheet -> for each of its stretches, whether it runs along a crease
     for loop in boundary_loops(f[region]):
         m = len(loop)
-        lab = np.array([sheet[across[k]] if (k := int(loop[(j + 1) % m]) * nv + int(loop[j])) in across else -1
-                        for j in range(m)])
+        lab = sheets_across(np.asarray(loop, dtype=np.int64))
         if (lab == lab[0]).all():  # one sheet (or none) all round
             if lab[0] >= 0:
                 stretches.setdefault(int(lab[0]), []).append(False)
