@@ -279,3 +279,81 @@ def test_fit_circle_recovers_a_tilted_circle_and_refuses_a_line():
     assert np.allclose(c.center, centre, atol=1e-9) and abs(c.radius - r) < 1e-9
     assert abs(abs(float(c.axis @ axis)) - 1.0) < 1e-12
     assert fit_circle(np.outer(np.linspace(0, 1, 7), [1.0, 2.0, 3.0])) is None  # collinear
+
+
+def test_a_curved_end_walks_on_over_notches_of_the_border_along_its_rim(monkeypatch):
+    """A hole border that zigzags along a rim (every other border vertex on the rim's circle, the
+    ones between 0.1 inside it): the end moves along the border to the last vertex on the circle,
+    20 degrees round, and leaves along the circle's tangent there. Stepping only to the next
+    border vertex (as before), it stays where it is: the next vertex is off the circle."""
+    import algorithms.creases as cr
+    from algorithms.creases import CreaseEnds
+
+    ang = np.radians(np.arange(0, 22, 2.0))  # 0, 2, ..., 20 degrees: on the rim at even steps
+    r = np.where(np.arange(len(ang)) % 2 == 0, 1.0, 0.9)
+    rim = np.c_[r * np.cos(ang), r * np.sin(ang), np.zeros(len(ang))]
+    # the hole's far side, then the crease's other end (off the polygon)
+    V = np.vstack([rim, [[0.3, 0.2, 0.0], [0.3, -0.1, 0.0], [1.0, -0.1, 0.0]]])
+    polygon = tuple(range(len(V) - 1))
+    circle = Circle(np.zeros(3), 1.0, np.array([0.0, 0.0, 1.0]))
+    ends = CreaseEnds({0: [np.array([0.0, 1.0, 0.0])]}, {0: [len(V) - 1]}, {0: [np.eye(3)[:2]]}, {0: [circle]})
+    (k, d, _, c), = ends.at(polygon, V)
+    assert k == 10 and c is circle
+    assert np.allclose(d, [-np.sin(ang[10]), np.cos(ang[10]), 0.0])
+    monkeypatch.setattr(cr, "_on_circle", lambda p, c, tol=0.01: False)
+    (k, d, _, c), = CreaseEnds({0: [np.array([0.0, 1.0, 0.0])]}, {0: [len(V) - 1]}, {0: [np.eye(3)[:2]]},
+                               {0: [circle]}).at(polygon, V)
+    assert k == 0 and np.allclose(d, [0.0, 1.0, 0.0])
+
+
+def test_a_rim_of_collinear_pieces_reads_as_its_circle_and_a_noisy_edge_stays_straight(monkeypatch):
+    """trimesh's 48-gon cylinder subdivided twice (as the sweep's annulus, bench/sweep.py): each
+    side of the rim is cut into four collinear pieces, so an end's last three points read straight
+    (as before: no circle). The crease's longer stretch fits the rim's circle within creases.FIT
+    and a line 10 times worse (creases.LINE): radius 0.997 (the pieces' midpoints lie inside the
+    circle). A box edge whose points are off the line by up to 1e-3 fits a circle too (radii 7 and
+    32 for an edge 2 long), and about as well as a line: it stays straight."""
+    import algorithms.creases as cr
+    from algorithms import cases as gen
+
+    cyl = gen.subdivided(trimesh.creation.cylinder(radius=1.0, height=1.0, sections=48), 2)
+    V, F = np.asarray(cyl.vertices), np.asarray(cyl.faces)
+    cen = V[F].mean(axis=1)
+    F = F[~((np.abs(np.arctan2(cen[:, 1], cen[:, 0])) < 0.2) & (cen[:, 2] > 0.2))]  # a notch at the top rim
+
+    def radii(V, F):
+        return [None if c is None else c.radius for cs in crease_ends(V, F, 40.0).circles.values() for c in cs]
+
+    got = radii(V, F)
+    assert len(got) == 2 and all(r is not None and abs(r - 1.0) < 0.005 for r in got), got
+    box = gen.subdivided(trimesh.creation.box((2.0, 2.0, 1.0)), 5)
+    B, G = np.asarray(box.vertices).copy(), np.asarray(box.faces)
+    edge = (np.abs(B[:, 1] - 1.0) < 1e-9) & (np.abs(B[:, 2] - 0.5) < 1e-9)
+    B[edge, 1:] += np.random.default_rng(0).uniform(-1e-3, 1e-3, (edge.sum(), 2))
+    G = G[np.linalg.norm(B[G].mean(axis=1) - [0.0, 1.0, 0.5], axis=1) >= 0.1]  # a hole on the edge
+    assert radii(B, G) == [None, None]
+    monkeypatch.setattr(cr, "LINE", 0.0)
+    assert all(r is not None and r > 5 for r in radii(B, G))
+    monkeypatch.setattr(cr, "LINE", np.inf)  # as before
+    assert radii(V, F) == [None, None]
+
+
+
+def test_ends_of_a_noisy_fine_rim_that_read_straight_take_its_circle(monkeypatch):
+    """The noisy 256-gon rim above over six noise seeds: an end's last three points bend by less
+    than 3 degrees on some seeds and read straight (6 of the 12 ends, as before); read from the
+    longer stretch too (creases.LINE), 11 of 12 ends get the rim's circle, each within 1 %."""
+    import algorithms.creases as cr
+
+    def radii():
+        out = []
+        for seed in range(6):
+            V, F, top = _noisy_rim_cylinder(256, 1e-3, seed)
+            out += [c and c.radius for v in top for c in crease_ends(V, F, 40.0).circles.get(int(v), [])]
+        return out
+
+    got = radii()
+    assert len(got) == 12 and sum(r is not None and abs(r - 1.0) < 0.01 for r in got) == 11, got
+    monkeypatch.setattr(cr, "LINE", np.inf)
+    got = radii()
+    assert sum(r is None for r in got) == 6, got

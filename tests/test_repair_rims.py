@@ -94,7 +94,8 @@ def test_the_angle_polish_keeps_its_points_on_the_surface_in_a_concave_corner(mo
     """bench/sweep.py cut mushroom:5:0: a fill in the concave corner under the mushroom's cap. The
     polish moved two points in planes its sliver stars tilted, 0.10-0.11 into the cap (3.8 % of
     the diagonal); kept within a quarter of their stars' reach from the stars' old faces (the guard
-    before), 0.048; on the old faces (refine.ON_STAR), the farthest new vertex is 0.003 off."""
+    before), 0.048; on the old faces (refine.ON_STAR), the farthest new vertex is 0.003 off. (With
+    the guards off, 0.098 since the rim's ends read its circle over notches, creases.CreaseEnds.at.)"""
     case = _sweep_cut("mushroom:5:0")
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
     out = repair(model, RepairParams()).mesh
@@ -106,16 +107,25 @@ def test_the_angle_polish_keeps_its_points_on_the_surface_in_a_concave_corner(mo
     monkeypatch.setattr(R, "RING_LINE", 0.0)
     out = repair(model, RepairParams()).mesh
     err = point_to_surface(out.vertices[n_in:], case.truth.vertices, case.truth.faces)
-    assert err.max() > 0.1, err.max()
+    assert err.max() > 0.05, err.max()
 
 
 def test_a_hole_on_a_face_along_a_sharp_rim_continues_that_face(monkeypatch):
     """bench/sweep.py cut mushroom:6:0: a hole on the cap's nearly flat underside, its border along
     the sharp rim. Read with the rim's other face, the fill sagged 0.75 % of the diagonal below the
-    truth (MeshLib's: 0.01 %)."""
+    truth (MeshLib's: 0.01 %). The faces are read by sheet in the fairing of each side of a crease
+    chain: with the rim's ends read straight (as before creases.LINE), a chain continues one over a
+    face the border already has, and the side faired by its sheet is 0.014 % off. Read as the rim's
+    circle, the ends' walks follow the border round the rim: no chain, no sides, and the APSS
+    projection near the rim leaves the fill 0.29 % off (README, known limits)."""
+    import algorithms.creases as C
+
     case = _sweep_cut("mushroom:6:0")
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
     h = _hausdorff(case, model, genus=0)
+    assert h < 0.004, h
+    monkeypatch.setattr(C, "LINE", np.inf)
+    h = _hausdorff(case, model)
     assert h < 0.0005, h
     monkeypatch.setattr(sheets, "along_crease", lambda v, f, *a, **k: np.zeros(len(f), dtype=bool))
     h = _hausdorff(case, model)
@@ -152,16 +162,18 @@ def test_a_fine_rim_half_cut_away_is_read_as_its_circle(monkeypatch):
     through the last three vertices at each end of the cut rim had radius 0.055 for 0.22, the two
     ends were continued along their tangents, and their rays met at a corner 0.26 from the axis:
     7.4 % of the diagonal. Fitted along the rim (creases.LONG_FIT), both ends read the rim's circle:
-    3.6 % (MeshLib's: 4.2 %)."""
+    3.6 % (MeshLib's: 4.2 %), the arc between them refused: it passed the border vertices on the
+    rim, where the border zigzags along it. Walking on over those notches (creases.CreaseEnds.at),
+    the ends meet along the rim: 0.66 %. (Three-point circles: tests/test_creases.py.)"""
     import algorithms.creases as C
 
     case = _sweep_cut("mushroom:10:1")
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
     h = _hausdorff(case, model, genus=0)
-    assert h < 0.045, h
-    monkeypatch.setattr(C, "LONG_FIT", 10**6)  # three points only, as before
+    assert h < 0.01, h
+    monkeypatch.setattr(C, "_on_circle", lambda p, c, tol=0.01: False)  # no steps over notches, as before
     h = _hausdorff(case, model)
-    assert h > 0.06, h
+    assert h > 0.03, h
 
 
 def test_a_fillet_s_two_ends_are_not_joined_the_long_way_round(monkeypatch):
