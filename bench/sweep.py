@@ -281,8 +281,10 @@ def markdown(rows: list[dict], command: str) -> str:
         "looked at while the rules were made, except the ones the tests name (tests/test_repair_random_cuts.py, "
         "test_repair_sheets.py, test_repair_rims.py), the thin-plate cuts the sheet rule was made on "
         "(repair_field.through_sheet), the turned-part cuts the rim rules were traced on (darning/sheets.py, "
-        "refine._move_best) and the mushroom, featuretype and trefoil cuts the crease circles and facing rims "
-        "were traced on (creases.crease_ends, repair_field._between); each then checked on the whole sweep. "
+        "refine._move_best), the mushroom, featuretype and trefoil cuts the crease circles and facing rims "
+        "were traced on (creases.crease_ends, repair_field._between) and the annulus, mushroom, featuretype and "
+        "frep-plate3 cuts the fine-rim walk was traced on (creases.CreaseEnds.at); each then checked on the "
+        "whole sweep. "
         "Scored as the repair benchmark scores (Hausdorff in % of the model's diagonal, sampled); "
         "\"light\"/\"full\": our repair, \"meshlib\": MeshLib's bridgeFillAllHoles on the same cut; "
         f"in the ratios MeshLib's distance counts as at least {100 * RATIO_FLOOR:g} % (it is exact on some cuts).",
