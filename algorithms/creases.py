@@ -36,6 +36,7 @@ class CreaseEnds:
     planes: dict[int, NDArray[np.float64]] = field(default_factory=dict)  # (P, 3) face planes at a vertex
     edges: dict[int, list[NDArray[np.float64]]] = field(default_factory=dict)  # normal pairs of all sharp edges
     moved: dict[int, set[int]] = field(default_factory=dict)  # border vertex -> the ends ``at`` moved to it
+    followed: set[int] = field(default_factory=set)  # ends whose crease the border follows into another (``at``)
 
     def at(self, polygon: tuple[int, ...], V: NDArray[np.float64] | None = None,
            along: float = 12.0) -> list[tuple[int, NDArray[np.float64], NDArray[np.float64], Circle | None]]:
@@ -82,6 +83,7 @@ class CreaseEnds:
                     t = tangent(V[polygon[step[0]]], t, c)  # along a fine rim the direction turns with it
                 prev, k = k, step[0]
             if k != k0 and _curve_to(V, polygon, prev, k, lim, starts - {k0}):
+                self.followed.add(int(polygon[k0]))
                 continue  # the border goes on as the crease into another end: it is the crease already
             if polygon[k] != polygon[k0]:
                 self.moved.setdefault(int(polygon[k]), set()).add(int(polygon[k0]))
