@@ -374,8 +374,11 @@ def test_a_region_the_global_fairing_throws_off_takes_a_fallback(monkeypatch):
     of the diagonal off (Hausdorff 47.5 %). Judged over every new vertex at once the result looked
     plausible; judged per region against its own border (repair._fair_new), that region takes U2.
     Since the fairing reads only the sheets its patches continue (darning/sheets.py), U3 keeps that
-    region near its hole; with every face read, as before, the fallback is still what does."""
+    region near its hole; with every face read, as before, the fallback is still what does (with the
+    patches along rims the border follows pinned, repair.RIM_PIN, the region is not faired
+    globally at all: off for this check)."""
     import algorithms.darning.sheets as sheets
+    import algorithms.repair as rp
     from algorithms.metrics import point_to_surface
 
     part = Mesh(*load_raw(data_file("featuretype.stl")))
@@ -387,6 +390,7 @@ def test_a_region_the_global_fairing_throws_off_takes_a_fallback(monkeypatch):
         if every_face:
             monkeypatch.setattr(sheets, "along_crease", lambda v, f, *a, **k: np.zeros(len(f), dtype=bool))
             monkeypatch.setattr(sheets, "reached_sheets", lambda v, f, *a, **k: np.ones(len(f), dtype=bool))
+            monkeypatch.setattr(rp, "RIM_PIN", False)
         res = repair(model, RepairParams(field=FieldParams(mode="light")))
         assert_input_kept(model, res.mesh, fragments=True)
         off = point_to_surface(res.mesh.vertices, part.vertices, part.faces).max() / part.bbox_diagonal()
