@@ -134,11 +134,16 @@ def _fine(chord: float, c: Circle, edges: int = 1) -> bool:
     return chord <= 2 * c.radius * np.sin(np.radians(FINE * edges / 2))
 
 
+def _miss(p: NDArray[np.float64], c: Circle) -> float:
+    """How far points p (N, 3) lie off circle c at worst: the larger of |distance to its centre -
+    radius| and the distance off its plane."""
+    q = np.asarray(p, dtype=np.float64).reshape(-1, 3) - c.center
+    return float(max(np.abs(np.linalg.norm(q, axis=1) - c.radius).max(), np.abs(q @ c.axis).max()))
+
+
 def _on_circle(p: NDArray[np.float64], c: Circle, tol: float = 0.01) -> bool:
-    """Whether point p lies on circle c, within ``tol`` of its radius (radially and off its plane)."""
-    q = p - c.center
-    h = float(q @ c.axis)
-    return abs(float(np.linalg.norm(q - h * c.axis)) - c.radius) <= tol * c.radius and abs(h) <= tol * c.radius
+    """Whether point p lies on circle c, within ``tol`` of its radius (``_miss``)."""
+    return _miss(p, c) <= tol * c.radius
 
 
 def _nones():
@@ -312,8 +317,7 @@ def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: 
         t = before(u, w)
         if c is None or t is None:  # a fourth point on the same circle, else a kink, not an arc
             return None
-        if abs(float(np.linalg.norm(vertices[t] - c.center)) - c.radius) > 0.02 * c.radius \
-                or abs(float((vertices[t] - c.center) @ c.axis)) > 0.02 * c.radius:
+        if _miss(vertices[t], c) > 0.02 * c.radius:
             return None
         return long_fit([v, w, u, t]) or c
 
@@ -332,8 +336,7 @@ def crease_ends(vertices: NDArray[np.float64], faces: NDArray[np.int64], angle: 
             fit = fit_circle(p)
             if fit is None:
                 continue
-            off = max(np.abs(np.linalg.norm(p - fit.center, axis=1) - fit.radius).max(),
-                      np.abs((p - fit.center) @ fit.axis).max())
+            off = _miss(p, fit)
             if off > FIT * fit.radius:
                 continue
             if curved:

@@ -296,13 +296,15 @@ def test_a_curved_end_walks_on_over_notches_of_the_border_along_its_rim(monkeypa
     V = np.vstack([rim, [[0.3, 0.2, 0.0], [0.3, -0.1, 0.0], [1.0, -0.1, 0.0]]])
     polygon = tuple(range(len(V) - 1))
     circle = Circle(np.zeros(3), 1.0, np.array([0.0, 0.0, 1.0]))
-    ends = CreaseEnds({0: [np.array([0.0, 1.0, 0.0])]}, {0: [len(V) - 1]}, {0: [np.eye(3)[:2]]}, {0: [circle]})
-    (k, d, _, c), = ends.at(polygon, V)
+
+    def end():  # one curved end at vertex 0 (a new table each time: ``at`` records what it moved)
+        return CreaseEnds({0: [np.array([0.0, 1.0, 0.0])]}, {0: [len(V) - 1]}, {0: [np.eye(3)[:2]]}, {0: [circle]})
+
+    (k, d, _, c), = end().at(polygon, V)
     assert k == 10 and c is circle
     assert np.allclose(d, [-np.sin(ang[10]), np.cos(ang[10]), 0.0])
     monkeypatch.setattr(cr, "_on_circle", lambda p, c, tol=0.01: False)
-    (k, d, _, c), = CreaseEnds({0: [np.array([0.0, 1.0, 0.0])]}, {0: [len(V) - 1]}, {0: [np.eye(3)[:2]]},
-                               {0: [circle]}).at(polygon, V)
+    (k, d, _, c), = end().at(polygon, V)
     assert k == 0 and np.allclose(d, [0.0, 1.0, 0.0])
 
 
