@@ -738,6 +738,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             V, side_used = _fair_sides(V, F, n_before, n_input, params.fairing, crease_v, np.vstack(locked),
                                        params.crease_angle)
             fairing_used += f" + {side_used}"
+        held = np.zeros(0, dtype=np.int64)
         if params.field.use_free_points and len(model.free_points):
             # full mode: the free points sample the missing surface: the fill passes through them
             # (darning/samples.py), faired again around them
@@ -827,6 +828,13 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         for rbf, which, reach, band, sm in tips:  # a band along the fill's normals (implicit.refine_onto)
             V[which] = rbf.project_along(V[which], fill_normals(V, F[n_before:], which, smooth=sm),
                                          reach=min(reach, spacing)) if band else rbf.project(V[which], reach=reach)
+        if CONVEX_CLAMP:  # fills in convex (or concave) surroundings: back inside their faces' planes
+            from .darning.convex import clamp_fills
+
+            V, clamped = clamp_fills(V, F[:n_before], final, patch_ids, held=held,
+                                     skip=np.concatenate([t[1] for t in tips]) if tips else None)
+            if len(clamped):
+                timings_note["fairing"] += f" + {len(clamped)} vertices back inside convex surroundings"
         fixed = F[:n_before]
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
         # then Delaunay refinement for the angles (darning.refine_angles: flips first, points only
@@ -1151,6 +1159,9 @@ SIDE_REACH = 0.25  # _fair_sides: a side's fairing stays within this fraction of
 # patch beside a crease chain is: neither the global fairing nor the APSS moves it (the APSS rounds
 # the rim off: mushroom cut 6:0 of bench/sweep.py 0.29 %, annulus 4:1 1.5 %, with it 0.013, 0.64 %)
 RIM_PIN = True
+# the fills of holes whose surrounding faces are convex (or concave) are kept inside those faces'
+# planes (darning/convex.py): the fairing overshoots a soft crease
+CONVEX_CLAMP = True
 FLAT_HOLE = 1e-3  # a hole border within this fraction of its diameter of one plane is flat (_continue_creases)
 IN_PLANE = float(np.cos(np.radians(2.0)))  # a face within 2 degrees of a flat hole's plane lies in it (_flat_fills)
 
