@@ -37,19 +37,22 @@ STRAY = 0.25
 
 
 def ring_planes(V: NDArray[np.float64], ring: NDArray[np.int64], *, tol: float = CONVEX_TOL,
-                stray: float | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+                stray: float | None = None, samples: NDArray[np.float64] | None = None
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
     """The planes (unit normals (K, 3), offsets (K,)) of the faces ``ring`` that support it: every
     ring vertex on or below the plane (within ``tol`` of the ring's extent), the normals pointing
     out of the side the surface bends to, so that the missing surface satisfies ``n . x <= d``
-    for each. None when more than ``stray`` (default ``STRAY``) of the faces do not support the ring on either side
-    (a saddle, a scan's noise). Degenerate faces are left out. The faces astride a soft crease do
-    not support the ring (the crease is a curve, a face's plane cuts across it): the others do."""
+    for each. None when more than ``stray`` (default ``STRAY``) of the faces do not support the
+    ring on either side (a saddle, a scan's noise), or when one of ``samples`` (points of the
+    missing surface: fill vertices pulled through free points) lies above a plane kept (not convex
+    there). Degenerate faces are left out. The faces astride a soft crease do not support the ring
+    (the crease is a curve, a face's plane cuts across it): the others do."""
     stray = STRAY if stray is None else stray
     ring = np.asarray(ring, dtype=np.int64)
     if len(ring) < 3:
         return None
     t = V[ring]
-    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])  # (Mesh.face_normals, with the areas kept)
     area = np.linalg.norm(n, axis=1)
     ok = area > 1e-12 * max(float(area.max()), 1e-300)
     if ok.sum() < 3:
@@ -57,13 +60,15 @@ def ring_planes(V: NDArray[np.float64], ring: NDArray[np.int64], *, tol: float =
     n, t = n[ok] / area[ok, None], t[ok]
     d = np.einsum("ij,ij->i", n, t.mean(axis=1))
     pts = np.unique(ring[ok].ravel())
-    size = float(np.linalg.norm(np.ptp(V[pts], axis=0)))
+    eps = tol * float(np.linalg.norm(np.ptp(V[pts], axis=0)))
     above = V[pts] @ n.T - d  # (points, faces): signed height over each face's plane
-    eps = tol * size
     for sign in (1.0, -1.0):  # convex: the surface below the planes; concave: above them
         support = (sign * above <= eps).all(axis=0)
         if support.mean() >= 1.0 - stray:
-            return sign * n[support], sign * d[support]
+            n, d = sign * n[support], sign * d[support]
+            if samples is not None and len(samples) and float((samples @ n.T - d).max()) > eps:
+                return None
+            return n, d
     return None
 
 
@@ -97,20 +102,23 @@ def clamp_fills(V: NDArray[np.float64], F_in: NDArray[np.int64], holes: list[tup
     moved: list[NDArray[np.int64]] = []
     skip = np.zeros(0, dtype=np.int64) if skip is None else np.asarray(skip, dtype=np.int64)
     held = np.zeros(0, dtype=np.int64) if held is None else np.asarray(held, dtype=np.int64)
+    # the input faces at a hole vertex, found once; each hole's ring among them by a vertex mask
+    mask = np.zeros(len(V), dtype=bool)
+    for poly in holes:
+        mask[list(poly)] = True
+    near = F_in[mask[F_in].any(axis=1)]
+    mask[:] = False
     for poly, ids in zip(holes, patch_ids):
         ids = np.setdiff1d(ids, skip)
         if not len(ids) or len(poly) < 3:
             continue
-        ring = F_in[np.isin(F_in, np.asarray(poly, dtype=np.int64)).any(axis=1)]
-        planes = ring_planes(V, ring)
+        mask[list(poly)] = True
+        ring = near[mask[near].any(axis=1)]
+        mask[list(poly)] = False
+        planes = ring_planes(V, ring, samples=V[ids[np.isin(ids, held)]])
         if planes is None:
             continue
-        n, d = planes
-        size = float(np.linalg.norm(np.ptp(V[np.unique(ring.ravel())], axis=0)))
-        samples = ids[np.isin(ids, held)]
-        if len(samples) and float((V[samples] @ n.T - d).max()) > CONVEX_TOL * size:
-            continue
-        new = clamp_below(V[ids], n, d)
+        new = clamp_below(V[ids], *planes)
         step = np.any(new != V[ids], axis=1)
         out[ids[step]] = new[step]
         moved.append(ids[step])
