@@ -843,6 +843,10 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             movable = np.union1d(movable, np.setdiff1d(np.concatenate(beside), crease_v))
         if len(keep_still):  # a pinned vertex on a plane (a CAD face) may move in it: tangential moves stay on it
             movable = np.union1d(movable, _flat_stars(V, F, np.setdiff1d(keep_still, crease_v), 1.5))
+        # never an input vertex: the copy of a split vertex on a patch's border is the input vertex again once
+        # the copies merge (merge_copies), and came into ``beside`` and ``keep_still`` as that vertex (annulus
+        # cut 12:1 of bench/sweep.py, light mode: the smoothing moved one 0.047 and its input face was lost)
+        movable = movable[movable >= n_input]
         q = refine_angles(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None, movable=movable)
         V, F = q.vertices, np.vstack([fixed, q.faces])
     timings["darn"] = time.perf_counter() - t0

@@ -659,3 +659,30 @@ def test_a_wall_fragment_in_the_gap_does_not_part_two_facing_rims(monkeypatch):
     monkeypatch.setattr(rf, "_between", functools.partial(rf._between, rim=np.inf))  # every loop counts
     out = repair(model, RepairParams())
     assert topology(out.mesh.faces).genus == 0
+
+
+def test_no_input_vertex_moves_where_the_copies_of_a_split_vertex_merge(monkeypatch):
+    """bench/sweep.py cut annulus:12:1, light mode: a patch beside a crease chain had a copy of a split
+    input vertex on its border; the copies merged back into the input vertex after the darning, and
+    the list of vertices kept still with that patch then named the input vertex, which the angle
+    refinement took as a vertex it might move: the smoothing moved it 0.047 and its input face was
+    no longer in the output. The refinement moves new vertices only."""
+    import importlib
+
+    from bench.sweep import make_cut
+
+    refine = importlib.import_module("algorithms.darning.refine")
+    case = make_cut("annulus", 12, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    given = []
+    original = refine.refine_angles
+
+    def spy(*a, **k):
+        given.append(np.asarray(k["movable"]))
+        return original(*a, **k)
+
+    monkeypatch.setattr(refine, "refine_angles", spy)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert given and len(given[0]) and given[0].min() >= model.mesh.n_vertices
+    assert_input_kept(model, res.mesh, fragments=True)
+    assert_closed_manifold(res, genus=1)
