@@ -850,6 +850,9 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
         q = refine_angles(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None, movable=movable)
         V, F = q.vertices, np.vstack([fixed, q.faces])
     timings["darn"] = time.perf_counter() - t0
+    V, F, pinched = _split_pinches(V, F)
+    if pinched:
+        notes.append(f"{pinched} vertices where the surface met itself at a point split into copies (one per fan)")
     new_faces = np.arange(n_before, len(F))
     stages.append(Stage("darned", f"{len(final)} holes darned with {params.darning}: {len(F) - n_before} new faces",
                         vertices=V, faces=F, bridges=tuple(b.polyline(V) for b in bridges)))
@@ -863,6 +866,24 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     return RepairResult(out, model, params, class_found, tuple(bridges), tuple(lines), tuple(rejected),
                         tuple(records), tuple(stages), new_faces, timings, lc_used,
                         timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "), attached)
+
+
+def _split_pinches(V: NDArray[np.float64], F: NDArray[np.int64]
+                   ) -> tuple[NDArray[np.float64], NDArray[np.int64], int]:
+    """Each fan of faces around a vertex its own vertex (normalize.split_fans: the largest fan keeps
+    the index, the others get copies at the same position): where the patches and the fragments put
+    back meet at a vertex only, the output is a manifold surface all the same (bench/sweep.py cut
+    featuretype:11:0, light mode: three fragments set aside, each hanging at one border vertex and
+    touching the others at a free vertex of theirs, left that vertex two fans; Euler -17, "genus
+    9.5"). Returns (vertices, faces, vertices split)."""
+    from .normalize import split_fans
+    from .topology import face_adjacency
+
+    f = np.asarray(F, dtype=np.int64)
+    out, origin = split_fans(f, np.ones(len(f), dtype=bool), face_adjacency(f), len(V))
+    if len(origin) == len(V):
+        return V, F, 0
+    return np.vstack([V, V[origin[len(V):]]]), out, int(len(np.unique(origin[len(V):])))
 
 
 class _PendingEdges:

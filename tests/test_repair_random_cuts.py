@@ -686,3 +686,19 @@ def test_no_input_vertex_moves_where_the_copies_of_a_split_vertex_merge(monkeypa
     assert given and len(given[0]) and given[0].min() >= model.mesh.n_vertices
     assert_input_kept(model, res.mesh, fragments=True)
     assert_closed_manifold(res, genus=1)
+
+
+def test_fragments_touching_at_a_free_vertex_leave_no_pinch():
+    """bench/sweep.py cut featuretype:11:0, light mode: three fragments set aside (one hangs at each of
+    three border vertices) touch one another at a vertex no other face has. Put back, that vertex
+    had two fans of faces: closed, but not a manifold (Euler -17, "genus 9.5"). Each fan gets its
+    own vertex now (a copy at the same position), and the repair says so."""
+    from bench.sweep import make_cut
+
+    case = make_cut("featuretype", 11, 0)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    assert sum(s.reason.startswith("fragment") for s in model.set_aside) == 22
+    res = closed_repair(model, genus=9)
+    assert "1 vertices where the surface met itself at a point split into copies" in res.tunnel_note
+    assert topology(res.mesh.faces).manifold_vertices
+    assert_input_kept(model, res.mesh, fragments=True)
