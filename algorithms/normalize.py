@@ -149,7 +149,7 @@ def _sheet_links(v: NDArray[np.float64], f: NDArray[np.int64], alive: NDArray[np
     return np.vstack(out) if out else np.zeros((0, 3), dtype=np.int64)
 
 
-def split_fans(f: NDArray[np.int64], alive: NDArray[np.bool_], links: NDArray[np.int64],
+def _split_fans(f: NDArray[np.int64], alive: NDArray[np.bool_], links: NDArray[np.int64],
                 nv: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Give each fan of faces around a vertex its own vertex (copies appended after ``nv``).
 
@@ -269,7 +269,7 @@ def normalize(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
 
     # 4. split vertices where separate fans (or sheets) meet; tiny fragments that touch a larger
     #    island only at vertices are set aside
-    f_split, vertex_origin = split_fans(f, alive, links, nv)
+    f_split, vertex_origin = _split_fans(f, alive, links, nv)
     ids = np.flatnonzero(alive)
     split_islands = None  # (faces, count, labels) of the islands of f_split[ids], reused in step 5
     if len(ids):
@@ -290,7 +290,7 @@ def normalize(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
                                         f"{big} only at vertex {vo}")
         if int(alive.sum()) != n_alive:  # fragments went: the sheets and fans change
             links = _sheet_links(v, f, alive)
-            f_split, vertex_origin = split_fans(f, alive, links, nv)
+            f_split, vertex_origin = _split_fans(f, alive, links, nv)
             split_islands = None
 
     # 5. orientation per island: flip the minority so neighbours agree; set aside what cannot be

@@ -870,20 +870,25 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
 
 def _split_pinches(V: NDArray[np.float64], F: NDArray[np.int64]
                    ) -> tuple[NDArray[np.float64], NDArray[np.int64], int]:
-    """Each fan of faces around a vertex its own vertex (normalize.split_fans: the largest fan keeps
-    the index, the others get copies at the same position): where the patches and the fragments put
-    back meet at a vertex only, the output is a manifold surface all the same (bench/sweep.py cut
+    """Each fan of faces around a vertex its own vertex (topology.vertex_fans; the largest fan keeps
+    the vertex, each other one gets a copy at the same position): where the patches and the fragments
+    put back meet at a vertex only, the output is a manifold surface all the same (bench/sweep.py cut
     featuretype:11:0, light mode: three fragments set aside, each hanging at one border vertex and
     touching the others at a free vertex of theirs, left that vertex two fans; Euler -17, "genus
     9.5"). Returns (vertices, faces, vertices split)."""
-    from .normalize import split_fans
-    from .topology import face_adjacency
+    from .topology import vertex_fans
 
-    f = np.asarray(F, dtype=np.int64)
-    out, origin = split_fans(f, np.ones(len(f), dtype=bool), face_adjacency(f), len(V))
-    if len(origin) == len(V):
+    fans = vertex_fans(F)
+    if not fans:
         return V, F, 0
-    return np.vstack([V, V[origin[len(V):]]]), out, int(len(np.unique(origin[len(V):])))
+    F = np.array(F, dtype=np.int64, copy=True)
+    extra = []
+    for v, groups in fans.items():
+        for fan in sorted(groups, key=len)[:-1]:  # the largest fan keeps v
+            rows = np.asarray(fan, dtype=np.int64)
+            F[rows] = np.where(F[rows] == v, len(V) + len(extra), F[rows])
+            extra.append(v)
+    return np.vstack([V, V[extra]]), F, len(fans)
 
 
 class _PendingEdges:
