@@ -711,8 +711,11 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             # over it would hold a triangle with a vertex twice: featuretype cut 15_0, full mode)
             final[k + 1:] = [_drop_repeats(tuple(alias.get(x, x) for x in p)) for p in final[k + 1:]]
             pending = _PendingEdges(final, start=k + 1)
-            pinned = [merge_copies(a, pairs) for a in pinned]
-            beside = [merge_copies(a, pairs) for a in beside]
+            # the vertices kept still are new ones: a copy merged into an input vertex leaves the lists (in
+            # them, the input vertex went on to the vertices the angle refinement may move: annulus cut 12:1
+            # of bench/sweep.py, light mode, moved 0.047, its input face lost)
+            pinned = [a[a >= n_input] for a in (merge_copies(a, pairs) for a in pinned)]
+            beside = [a[a >= n_input] for a in (merge_copies(a, pairs) for a in beside)]
             locked = [merge_copies(a, pairs) for a in locked]
             on_crease[pairs[:, 1]] |= on_crease[pairs[:, 0]]
         work.faces.append(to_global[np.asarray(patch.faces, dtype=np.int64)])
@@ -843,14 +846,10 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             movable = np.union1d(movable, np.setdiff1d(np.concatenate(beside), crease_v))
         if len(keep_still):  # a pinned vertex on a plane (a CAD face) may move in it: tangential moves stay on it
             movable = np.union1d(movable, _flat_stars(V, F, np.setdiff1d(keep_still, crease_v), 1.5))
-        # never an input vertex: the copy of a split vertex on a patch's border is the input vertex again once
-        # the copies merge (merge_copies), and came into ``beside`` and ``keep_still`` as that vertex (annulus
-        # cut 12:1 of bench/sweep.py, light mode: the smoothing moved one 0.047 and its input face was lost)
-        movable = movable[movable >= n_input]
         q = refine_angles(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None, movable=movable)
         V, F = q.vertices, np.vstack([fixed, q.faces])
     timings["darn"] = time.perf_counter() - t0
-    V, F, pinched = _split_pinches(V, F)
+    V, F, pinched = _split_pinches(V, F, model.mesh.n_faces)
     if pinched:
         notes.append(f"{pinched} vertices where the surface met itself at a point split into copies (one per fan)")
     new_faces = np.arange(n_before, len(F))
@@ -868,25 +867,30 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                         timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "), attached)
 
 
-def _split_pinches(V: NDArray[np.float64], F: NDArray[np.int64]
+def _split_pinches(V: NDArray[np.float64], F: NDArray[np.int64], n_model: int
                    ) -> tuple[NDArray[np.float64], NDArray[np.int64], int]:
     """Each fan of faces around a vertex its own vertex (topology.vertex_fans; the largest fan keeps
     the vertex, each other one gets a copy at the same position): where the patches and the fragments
     put back meet at a vertex only, the output is a manifold surface all the same (bench/sweep.py cut
     featuretype:11:0, light mode: three fragments set aside, each hanging at one border vertex and
     touching the others at a free vertex of theirs, left that vertex two fans; Euler -17, "genus
-    9.5"). Returns (vertices, faces, vertices split)."""
+    9.5"). Only the vertices of faces after the first ``n_model`` (the model's own, whose vertices
+    normalisation left with one fan each) are read: their whole stars, and nothing else (the 56k
+    faces of the closed bunny cost 40-60 ms read whole). Returns (vertices, faces, vertices split)."""
     from .topology import vertex_fans
 
-    fans = vertex_fans(F)
+    mine = np.zeros(len(V), dtype=bool)
+    mine[F[n_model:].ravel()] = True
+    rows = np.flatnonzero(mine[F].any(axis=1))  # every face at such a vertex
+    fans = {v: g for v, g in vertex_fans(F[rows]).items() if mine[v]}  # a partial star elsewhere: not read
     if not fans:
         return V, F, 0
     F = np.array(F, dtype=np.int64, copy=True)
     extra = []
-    for v, groups in fans.items():
+    for v, groups in fans.items():  # the pinched vertices only: a handful
         for fan in sorted(groups, key=len)[:-1]:  # the largest fan keeps v
-            rows = np.asarray(fan, dtype=np.int64)
-            F[rows] = np.where(F[rows] == v, len(V) + len(extra), F[rows])
+            at = rows[np.asarray(fan, dtype=np.int64)]
+            F[at] = np.where(F[at] == v, len(V) + len(extra), F[at])
             extra.append(v)
     return np.vstack([V, V[extra]]), F, len(fans)
 

@@ -112,3 +112,17 @@ def test_a_move_over_a_bent_star_lands_on_its_old_faces(monkeypatch):
         off[on_star] = (moved, worst)
     assert off[True][0] > 60 and off[True][1] < 1e-9, off  # on the old faces, to rounding
     assert off[False][1] > 0.05, off  # the plane's point itself: off the faces
+
+
+def test_a_vertex_of_a_fixed_face_never_moves_whatever_movable_says():
+    """refine_angles with every vertex named movable: the hole's border vertices (vertices of the fixed
+    faces) stay where they are, the patch's own move (repair handed an input vertex over once, when a
+    copy merged into it: bench/sweep.py annulus 12:1; its input face was lost)."""
+    from test_refine_kernels import jittered_patch
+
+    p, fixed, f, n = jittered_patch(0)
+    q = R.refine_angles(p, f, fixed, movable=np.arange(len(p)))
+    border = np.unique(fixed)
+    assert np.array_equal(q.vertices[border], p[border])
+    inner = np.setdiff1d(np.arange(n, len(p)), border)
+    assert np.any(q.vertices[inner] != p[inner])  # the patch's vertices did move

@@ -294,7 +294,8 @@ def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed
     (a point, a halved edge, a graded fan at a border corner), keeping those that improve the angles
     and fold nothing.
     ``movable``: vertices (besides the inserted ones) that the smoothing may move (new vertices of
-    the patch; never input vertices). ``rings``: how far around the bad faces the patch may change.
+    the patch; a vertex of a ``fixed_faces`` face never moves, whatever ``movable`` says). ``rings``: how
+    far around the bad faces the patch may change.
     """
     p = np.asarray(vertices, dtype=np.float64)
     f = np.array(patch, dtype=np.int64, copy=True).reshape(-1, 3)
@@ -320,6 +321,7 @@ def refine_angles(vertices: NDArray[np.float64], patch: NDArray[np.int64], fixed
         free = np.zeros(len(p), dtype=bool)
         if movable is not None:
             free[np.asarray(movable, dtype=np.int64)] = True
+        free[fixed.ravel()] = False  # a vertex of a fixed face never moves: that face would change
         P, sub, inserted, rounds = _refine_region(p, f[region], held, lk, free, target, np.radians(min_angle),
                                                   max_rounds, int(budget * max(len(f), 1)))
         if not _manifold(np.vstack([held, sub])) and _manifold(np.vstack([held, f[region]])):
