@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .mesh import Icadm, Mesh
+from .mesh import Icadm, Mesh, face_cross
 from .topology import boundary_loops, edge_table, euler_characteristic, genus, islands
 
 
@@ -22,8 +22,7 @@ def _unit(a: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def vertex_normals(mesh: Mesh) -> NDArray[np.float64]:
     """(V, 3) unit area-weighted vertex normals (zero where no face)."""
-    t = mesh.vertices[mesh.faces]
-    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])  # |fn| = 2 * area: area weighting
+    fn = face_cross(mesh.vertices, mesh.faces)  # |fn| = 2 * area: area weighting
     acc = np.zeros_like(mesh.vertices)
     for k in range(3):
         np.add.at(acc, mesh.faces[:, k], fn)

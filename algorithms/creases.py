@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from .bridge_graph import resample_chain, segment_distance
 from .holes import best_fit_plane
+from .mesh import face_normals
 from .topology import edge_table, face_adjacency
 
 
@@ -216,9 +217,7 @@ def sharp_edges(vertices: NDArray[np.float64], faces: NDArray[np.int64],
     f = np.asarray(faces, dtype=np.int64)
     if not len(f):
         return np.zeros((0, 2), dtype=np.int64), np.zeros((0, 2, 3))
-    t = vertices[f]
-    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-    fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+    fn = face_normals(vertices, f)
     pairs = face_adjacency(f)
     cos = np.einsum("ij,ij->i", fn[pairs[:, 0]], fn[pairs[:, 1]])
     sharp = pairs[cos < np.cos(np.radians(angle))]
@@ -231,10 +230,7 @@ def sharp_edges(vertices: NDArray[np.float64], faces: NDArray[np.int64],
 def _blocking(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """(vertex, unit normal) of every corner of every face: the faces around each vertex."""
     f = np.asarray(faces, dtype=np.int64)
-    t = vertices[f]
-    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-    fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
-    return f.ravel(), np.repeat(fn, 3, axis=0)
+    return f.ravel(), np.repeat(face_normals(vertices, f), 3, axis=0)
 
 
 # crease_ends: a curved crease's circle is fitted to its longest stretch of LONG_FIT points or more

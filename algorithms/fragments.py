@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .mesh import Icadm
+from .mesh import Icadm, face_cross
 from .topology import boundary_loops, euler_characteristic, islands, orientation_consistent
 
 
@@ -148,8 +148,7 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
             # in the hole its chained neighbours went into if they did
             own = set(np.unique(faces).tolist()) - set(attach)
             passes: dict[int, tuple[int, int]] = {}  # fragment vertex -> (polygon, position) of its pass
-            t = V[faces]
-            fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
+            fn = face_cross(V, faces).sum(axis=0)
             for a in attach:
                 spots = where[a]
                 if len(spots) == 1:

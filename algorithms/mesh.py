@@ -19,6 +19,25 @@ class MeshError(ValueError):
     """Input that cannot form a mesh (bad shapes, NaN coordinates, indices out of range)."""
 
 
+def face_cross(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """(F, 3) (v1 - v0) x (v2 - v0) of each face: its normal by the right-hand rule, of length
+    twice its area. The one place the package's face normals and areas come from."""
+    t = np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
+    return np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+
+
+def face_normals(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """(F, 3) unit normals by the right-hand rule (zero for degenerate faces)."""
+    n = face_cross(vertices, faces)
+    ln = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, ln, out=np.zeros_like(n), where=ln > 0)
+
+
+def face_areas(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """(F,) areas."""
+    return 0.5 * np.linalg.norm(face_cross(vertices, faces), axis=1)
+
+
 def _frozen(a: NDArray, dtype: type) -> NDArray:
     out = np.array(a, dtype=dtype, copy=True)
     out.setflags(write=False)
@@ -68,14 +87,10 @@ class Mesh:
 
     def face_normals(self) -> NDArray[np.float64]:
         """(F, 3) unit normals by the right-hand rule (zero for degenerate faces)."""
-        t = self.vertices[self.faces]
-        n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-        ln = np.linalg.norm(n, axis=1, keepdims=True)
-        return np.divide(n, ln, out=np.zeros_like(n), where=ln > 0)
+        return face_normals(self.vertices, self.faces)
 
     def face_areas(self) -> NDArray[np.float64]:
-        t = self.vertices[self.faces]
-        return 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+        return face_areas(self.vertices, self.faces)
 
     def bbox_diagonal(self) -> float:
         if not len(self.vertices):

@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .mesh import face_areas
 from .topology import boundary_loops, edge_table, euler_characteristic, islands, orientation_consistent, vertex_fans
 
 
@@ -186,15 +187,14 @@ def edge_length_cv(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> f
 
 
 def surface_area(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> float:
-    t = np.asarray(vertices)[np.asarray(faces)]
-    return float(0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1).sum())
+    return float(face_areas(vertices, faces).sum())
 
 
 def sample_surface(vertices: NDArray[np.float64], faces: NDArray[np.int64], n: int, *,
                    seed: int = 0) -> NDArray[np.float64]:
     """(n, 3) points uniformly distributed by area over the triangles."""
     t = np.asarray(vertices, dtype=np.float64)[np.asarray(faces)]
-    area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+    area = face_areas(vertices, faces)
     rng = np.random.default_rng(seed)
     idx = rng.choice(len(t), size=n, p=area / area.sum())
     r1, r2 = rng.random(n), rng.random(n)

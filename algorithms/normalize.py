@@ -15,14 +15,13 @@ from collections import deque
 import numpy as np
 from numpy.typing import NDArray
 
-from .mesh import Icadm, Mesh, SetAside
+from .mesh import Icadm, Mesh, SetAside, face_cross, face_normals
 from .topology import edge_table, face_adjacency, halfedges, islands
 
 
 def _degenerate(v: NDArray[np.float64], f: NDArray[np.int64], rel_area: float) -> tuple[NDArray, NDArray]:
     repeated = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
-    t = v[f]
-    area2 = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+    area2 = np.linalg.norm(face_cross(v, f), axis=1)
     diag = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0))) if len(v) else 0.0
     flat = ~repeated & (area2 <= 2 * rel_area * diag * diag)
     return repeated, flat
@@ -125,9 +124,7 @@ def _sheet_links(v: NDArray[np.float64], f: NDArray[np.int64], alive: NDArray[np
         g = sp.coo_matrix((np.ones(len(pr)), (pr[:, 0], pr[:, 1])), shape=(len(sub), len(sub)))
         _, plab = connected_components(g, directed=False)
         psize = np.bincount(plab)[plab]
-        t = v[sub]
-        nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-        nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
+        nrm = face_normals(v, sub)
         extra = []
         for k in many.tolist():
             hs = order[starts[k]:ends[k]]

@@ -47,7 +47,7 @@ from .creases import (
 )
 from .fragments import Attached, attach_fragments, fragment_bridge, fragment_faces
 from .holes import HoleVerdict, SimpleHoleTest, best_fit_plane, classify_hole, polygon_frame
-from .mesh import Icadm, Mesh
+from .mesh import Icadm, Mesh, face_normals
 from .metrics import angle_stats, min_angles, topology
 from .params import FieldParams
 from .records import Cancelled, ForceLine
@@ -1230,9 +1230,7 @@ def _flat_fills(V: NDArray[np.float64], F_in: NDArray[np.int64], n_input: int, h
             continue
         # the input face on each border edge: in the plane, or sharp to it
         ring = F_in[np.isin(F_in, list(poly)).any(axis=1)]
-        t = V[ring]
-        fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-        fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+        fn = face_normals(V, ring)
         edges = {(a, b) for a, b in zip(poly, poly[1:] + poly[:1])}
         on_border = np.array([any((int(f[k]), int(f[(k + 1) % 3])) in edges or (int(f[(k + 1) % 3]), int(f[k])) in edges
                                   for k in range(3)) for f in ring], dtype=bool)
@@ -1578,9 +1576,7 @@ def _flat_stars(V: NDArray[np.float64], F: NDArray[np.int64], which: NDArray[np.
     if not len(which):
         return which
     F = F[np.isin(F, which).any(axis=1)]  # the stars of ``which`` only
-    t = V[F]
-    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    n = face_normals(V, F)
     acc = np.zeros((len(V), 3))
     for k in range(3):
         np.add.at(acc, F[:, k], n)

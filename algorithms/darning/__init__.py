@@ -54,7 +54,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ..mesh import Mesh, _frozen
+from ..mesh import Mesh, _frozen, face_cross
 from ..topology import boundary_halfedges, boundary_loops, edge_table, halfedges, vertex_fans
 from .fair import ORDERS, WEIGHTINGS, fair, tangential_relax
 from .fan import fan
@@ -443,9 +443,10 @@ def _fits_its_border(v: NDArray[np.float64], ring: NDArray[np.int64], faces: NDA
     corners, not against the hole's largest surrounding face: a 37-face hole on a capsule's cap
     beside its long side slivers was left flat (sweep capsule 6:0: 1.08 % against 0.55 %); and at
     one corner, not all three: the cylinder's holes have corners whose only faces are the cap's."""
-    t = v[np.vstack([ring, faces])]
+    both = np.vstack([ring, faces])
+    t = v[both]
     longest = np.linalg.norm(t - np.roll(t, -1, axis=1), axis=2).max(axis=1)
-    area = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)  # twice the area: compared only
+    area = np.linalg.norm(face_cross(v, both), axis=1)  # twice the area: compared only
     n = len(ring)
     big_l, big_a = np.zeros(len(v)), np.zeros(len(v))  # the largest ring face at each vertex
     for k in range(3):
@@ -571,8 +572,7 @@ def _outside_normals(v: NDArray[np.float64], ring: NDArray[np.int64], lp: NDArra
     i = np.minimum(np.searchsorted(key[order], want), len(key) - 1)
     hit = key[order][i] == want
     fo = ring[order[i] // 3]
-    t = v[fo]
-    nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    nrm = face_cross(v, fo)
     out[hit] = nrm[hit]
     return out
 

@@ -28,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..mesh import face_cross
+
 # a ring is convex when no ring vertex lies more than this fraction of the ring's size above the
 # plane of a ring face (tessellation rounding; a scan's noise is far above it)
 CONVEX_TOL = 1e-4
@@ -52,7 +54,7 @@ def ring_planes(V: NDArray[np.float64], ring: NDArray[np.int64], *, tol: float =
     if len(ring) < 3:
         return None
     t = V[ring]
-    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])  # (Mesh.face_normals, with the areas kept)
+    n = face_cross(V, ring)
     area = np.linalg.norm(n, axis=1)
     ok = area > 1e-12 * max(float(area.max()), 1e-300)
     if ok.sum() < 3:

@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from ..mesh import face_cross
 from .fair_kernels import dense_solve
 
 
@@ -296,7 +297,7 @@ def folded(rbf: RBFImplicit, V: NDArray[np.float64], faces: NDArray[np.int64]) -
     docstring; on the zero set the gradient is the surface normal): a fill moved onto the zero set
     that folded over itself there."""
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    n = np.cross(V[f[:, 1]] - V[f[:, 0]], V[f[:, 2]] - V[f[:, 0]])
+    n = face_cross(V, f)
     g = rbf.gradient(V[f].reshape(-1, 3))
     g = (g / np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)).reshape(-1, 3, 3).sum(axis=1)
     return np.einsum("ij,ij->i", n, g) <= 0

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..mesh import face_areas, face_cross, face_normals
 from ..topology import VertexFaces, edge_table, face_adjacency, halfedges
 from .flips import edge_keys_among, flip_passes
 from .refine_kernels import corner_angles as _corner_angles
@@ -134,8 +135,7 @@ def refine(vertices: NDArray[np.float64], fixed_faces: NDArray[np.int64], patch:
     pts = [v]
     nv = len(v)
     splits = flips = 0
-    tri = v[f]
-    area = 0.5 * float(np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
+    area = float(face_areas(v, f).sum())
     max_faces = budget * (len(f) + area / (np.sqrt(3) / 4 * fill * fill)) if fill > 0 else np.inf
     rounds = 0
     # obtuse-edge splitting rounds are capped: an obtuse angle at a vertex nearly on a long border
@@ -494,8 +494,7 @@ def _graded_points(p: NDArray[np.float64], f: NDArray[np.int64], keep: NDArray[n
         link.append(nxt[link[-1]])
     if len(link) != len(a) + 1:
         return None
-    t = p[star]
-    nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]).sum(axis=0)
+    nrm = face_cross(p, star).sum(axis=0)
     if np.linalg.norm(nrm) == 0:
         return None
     nrm /= np.linalg.norm(nrm)
@@ -519,8 +518,7 @@ def _insert_points(p: NDArray[np.float64], f: NDArray[np.int64], x: NDArray[np.f
             return None
         cand = np.flatnonzero(inside)
         t = p[f[cand]]
-        n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-        n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+        n = face_normals(p, f[cand])
         d = np.einsum("ij,ij->i", y - t[:, 0], n)
         h = int(np.argmin(np.abs(d)))
         f = _split_face(f, int(cand[h]), len(p))

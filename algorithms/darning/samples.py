@@ -20,6 +20,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from ..mesh import face_cross
+
 
 def principal_normals(points: NDArray[np.float64], cloud: NDArray[np.float64], *, k: int = 10,
                       tree: cKDTree | None = None) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
@@ -69,7 +71,7 @@ def free_samples(free: NDArray[np.float64], V: NDArray[np.float64], F: NDArray[n
     if not len(faces):  # no face at the given vertices (a star prism's cut: every new vertex with faces held)
         return np.zeros((0, 3)), np.zeros((0, 3))
     t = V[faces]
-    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    fn = face_cross(V, faces)
     _, j = cKDTree(t.mean(axis=1)).query(P, k=1)
     s = np.einsum("ij,ij->i", n, fn[j])
     ok &= s != 0
@@ -109,8 +111,7 @@ def snap_to_samples(V: NDArray[np.float64], F: NDArray[np.int64], movable: NDArr
     near = np.zeros(len(V), dtype=bool)
     near[v[use]] = True
     fs = F[near[F].any(axis=1)]
-    t = V[fs]
-    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    fn = face_cross(V, fs)
     vn = np.zeros((len(V), 3))
     for k in range(3):
         np.add.at(vn, fs[:, k], fn)

@@ -27,16 +27,11 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from ..mesh import face_normals
 from ..topology import boundary_loops, face_adjacency
 
 ALONG = 30.0  # degrees: a stretch of border goes on along a crease (along_crease)
 ON_CURVE = 0.02  # of its chord: the stretch lies on the crease's continuation (along_crease)
-
-
-def _normals(vertices: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
-    t = np.asarray(vertices, dtype=np.float64)[f]
-    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-    return n / np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
 
 
 def reached_sheets(vertices: NDArray[np.float64], faces: NDArray[np.int64], judged: NDArray[np.bool_],
@@ -49,7 +44,7 @@ def reached_sheets(vertices: NDArray[np.float64], faces: NDArray[np.int64], judg
     if not len(f) or crease_angle >= 180:
         return np.ones(len(f), dtype=bool)
     judged = np.asarray(judged, dtype=bool)
-    n = _normals(vertices, f)
+    n = face_normals(vertices, f)
     a, b = face_adjacency(f, manifold_only=False).T
     ok = ~(judged[a] & judged[b]) | (np.einsum("ij,ij->i", n[a], n[b]) >= np.cos(np.radians(crease_angle)))
     label = _components(len(f), a[ok], b[ok])
@@ -87,7 +82,7 @@ def along_crease(vertices: NDArray[np.float64], faces: NDArray[np.int64], judged
     if crease_angle >= 180 or not judged.any() or not region.any():
         return out
     V = np.asarray(vertices, dtype=np.float64)
-    n = _normals(V, f)
+    n = face_normals(V, f)
     pairs, edge = face_adjacency(f, manifold_only=False, with_edges=True)
     a, b = pairs.T
     both = judged[a] & judged[b]

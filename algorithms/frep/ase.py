@@ -13,7 +13,7 @@ import numpy as np
 
 from ..boundary import vertex_normals
 from ..io import check_output
-from ..mesh import Mesh
+from ..mesh import Mesh, face_normals
 
 
 def _f(x: float) -> str:
@@ -23,9 +23,7 @@ def _f(x: float) -> str:
 def ase_text(mesh: Mesh, *, name: str = "frep", comment: str = "bridgefield frep") -> str:
     v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     safe = name.replace('"', "'")
-    t = v[f]
-    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
-    fn = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+    fn = face_normals(v, f)
     vn = vertex_normals(mesh)
     out = ["*3DSMAX_ASCIIEXPORT\t200", f'*COMMENT "{comment}"', "*SCENE {",
            f'\t*SCENE_FILENAME "{safe}"', "\t*SCENE_FIRSTFRAME 0", "\t*SCENE_LASTFRAME 0",

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from .. import metrics as M
 from ..boundary import vertex_normals
-from ..mesh import Mesh
+from ..mesh import Mesh, face_cross
 from .objects import FRepObject
 
 
@@ -82,7 +82,7 @@ def measure(obj: FRepObject, mesh: Mesh, *, voxel: float = float("nan")) -> Frep
     true_v = -obj.gradient(v[used])
     vdev = M.normal_deviation(vn, true_v)
     t = v[f]
-    fn = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    fn = face_cross(v, f)
     ok = np.linalg.norm(fn, axis=1) > 0
     fdev = M.normal_deviation(fn[ok], -obj.gradient(t.mean(axis=1)[ok]))
     mins = M.min_angles(v, f)

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from ..mesh import Mesh
+from ..mesh import Mesh, face_cross
 from ..topology import boundary_loops, edge_table, face_adjacency
 from .linking import DIAGONALS, Linked, link
 from .metrics import FrepMetrics, first_order_distance, measure, project
@@ -162,8 +162,7 @@ def _compact(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> Mesh:
 
 def _side_faces(vertices: NDArray[np.float64], faces: NDArray[np.int64], slope: float) -> NDArray[np.bool_]:
     """Faces whose projection on the camera plane (xy) has zero area (|n_z| <= slope)."""
-    t = vertices[faces]
-    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    n = face_cross(vertices, faces)
     ln = np.linalg.norm(n, axis=1)
     return np.abs(n[:, 2]) <= slope * np.maximum(ln, 1e-300)
 

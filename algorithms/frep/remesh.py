@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..mesh import face_areas, face_cross
 from ..topology import edge_table
 from .metrics import project
 from .objects import FRepObject
@@ -46,7 +47,7 @@ def _edge_faces(faces: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np
 
 
 def _unit_normals(p: NDArray[np.float64], tri: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    n = np.cross(p[tri[:, 1]] - p[tri[:, 0]], p[tri[:, 2]] - p[tri[:, 0]])
+    n = face_cross(p, tri)
     area2 = np.linalg.norm(n, axis=1)
     return n / np.maximum(area2, 1e-300)[:, None], area2
 
@@ -137,7 +138,7 @@ def cvt_relax(obj: FRepObject, vertices: NDArray[np.float64], faces: NDArray[np.
     n = len(p)
     for _ in range(rounds):
         tri = p[F]
-        area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        area = face_areas(p, F)
         cen = tri.mean(axis=1) * area[:, None]
         w = np.bincount(F.ravel(), weights=np.repeat(area, 3), minlength=n)
         target = np.stack([np.bincount(F.ravel(), weights=np.repeat(cen[:, j], 3), minlength=n) for j in range(3)],
