@@ -305,7 +305,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--models", default=",".join(MODELS), help="comma-separated: " + ", ".join(MODELS))
     ap.add_argument("--modes", default="light,full")
     ap.add_argument("--peers", default="meshlib", help="'meshlib' or '' (none)")
-    ap.add_argument("--only", help="one cut, MODEL:SEED:IT")
+    ap.add_argument("--only", help="these cuts only, MODEL:SEED:IT[,MODEL:SEED:IT...]")
     ap.add_argument("--save", help="write each cut as DIR/MODEL_SEED_IT.npz")
     ap.add_argument("--samples", type=int, default=4000)
     ap.add_argument("--timeout", type=float, default=300.0)
@@ -329,8 +329,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"sweep: {DATA} not found (the shared models)", file=sys.stderr)
         return 2
     if a.only:
-        m, s, i = a.only.split(":")
-        todo = [(m, int(s), int(i))]
+        todo = [(m, int(s), int(i)) for m, s, i in (c.split(":") for c in a.only.split(","))]
     else:
         todo = [(m, s, i) for s in _seeds(a.seeds) for m in a.models.split(",") for i in range(a.per_seed)]
     methods = {f"ours-{mode}": (lambda V, F, P, mode=mode: ours_repair(V, F, P, mode)) for mode in a.modes.split(",")}
