@@ -31,7 +31,7 @@ from algorithms.normalize import normalize
 from algorithms.params import FieldParams
 from algorithms.records import ARRIVED, ForceLine
 from algorithms.repair import RepairParams, repair
-from algorithms.repair_field import tunnel_pairs
+from algorithms.repair_field import _off_surface_pairs, tunnel_pairs
 
 trimesh = pytest.importorskip("trimesh")
 
@@ -150,3 +150,46 @@ def test_free_regions_and_their_reach():
     for w in ("uniform", "cotan"):
         out = fair(thrown, f, free, operator="U2", weights=w)
         assert np.abs(out[free, 2]).max() < 1e-9
+
+
+def _line_between(a: int, b: int, z: np.ndarray) -> ForceLine:
+    t = np.linspace(0.0, 1.0, len(z))
+    pts = np.c_[0.1 + 0.8 * t, np.full(len(z), 0.5), z]
+    return ForceLine(pts, pts * 0, pts * 0, np.ones(len(z)), ARRIVED, a, 0, b, 0)
+
+
+def test_a_tunnel_whose_every_line_runs_on_the_surface_is_none():
+    # a flat square; loops 1 and 2 own vertices 0 and 1; lines from 0 to 1 in the plane, or arching
+    # over it (through the air, as across the gap of a cut tube)
+    g = np.linspace(0.0, 1.0, 6)
+    V = np.array([(x, y, 0.0) for y in g for x in g])
+    F = np.array([f for j in range(5) for i in range(5) for f in ((j * 6 + i, j * 6 + i + 1, j * 6 + i + 7),
+                                                                (j * 6 + i, j * 6 + i + 7, j * 6 + i + 6))])
+    mesh = Mesh(V, F)
+    flat = [_line_between(0, 1, np.zeros(9)), _line_between(1, 0, np.full(9, 0.002))]  # 0.25 % of its length off
+    arch = _line_between(0, 1, 0.3 * np.sin(np.linspace(0.0, np.pi, 9)))
+    pos_in = {0: 1, 1: 2}
+    kept, left = _off_surface_pairs(flat, pos_in, mesh)
+    assert kept == [] and left == [(1, 2)]
+    kept, left = _off_surface_pairs(flat + [arch], pos_in, mesh)  # one line across a gap: the pair stays
+    assert len(kept) == 3 and left == []
+    # 2 % of its length above the surface: off it (the test reads the middle half of each line)
+    kept, left = _off_surface_pairs([_line_between(0, 1, np.full(9, 0.016)), arch], pos_in, mesh)
+    assert len(kept) == 2 and left == []
+    kept, left = _off_surface_pairs([_line_between(0, 1, np.full(9, 0.016))] * 2, pos_in, mesh)
+    assert len(kept) == 2
+
+
+def test_coarse_cone_two_holes_joined_by_lines_along_its_surface_get_no_handle():
+    """bench/sweep.py's coarse cone, cut 13:1 (a seed no rule was tuned on), light mode: three lines
+    (q 0.49, one way, all winning) from a loop of 7 vertices to a loop of 6 ran along the surface
+    between them: the tunnel rule made them a handle the truth does not have (genus 1)."""
+    from bench.sweep import make_cut
+
+    case = make_cut("cone", 13, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert_input_kept(model, res.mesh)
+    topo = topology(res.mesh.faces)
+    assert case.genus == 0 and (topo.watertight, topo.components, topo.genus) == (True, 1, 0)
+    assert "all along the surface between them: no tunnel" in res.tunnel_note
