@@ -702,3 +702,20 @@ def test_fragments_touching_at_a_free_vertex_leave_no_pinch():
     assert "1 vertices where the surface met itself at a point split into copies" in res.tunnel_note
     assert topology(res.mesh.faces).manifold_vertices
     assert_input_kept(model, res.mesh, fragments=True)
+
+
+def test_two_lines_one_way_between_holes_far_apart_make_no_handle(monkeypatch):
+    """bench/sweep.py cut bunny:14:0 (a seed no rule was tuned on), full mode: two lines (q 0.09 and
+    0.07) from a hole by the ear to the next hole, whose own lines all cross it, passed the tunnel
+    rule as lines one way that all win, and the bunny came back with a handle. The two holes lie
+    3.9 and 6.3 of their mean radii apart: lines one way join loops at most ONE_WAY_REACH radii
+    apart (repair_field.tunnel_pairs; a cut through-hole's rims are 1.3-1.7 apart)."""
+    import algorithms.repair_field as rf
+    from bench.sweep import make_cut
+
+    case = make_cut("bunny", 14, 0)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=0, mode="full")
+    assert "one way only, too far apart for a tunnel" in res.tunnel_note
+    monkeypatch.setattr(rf, "ONE_WAY_REACH", np.inf)
+    assert topology(repair(model, RepairParams(field=FieldParams(mode="full"))).mesh.faces).genus == 1

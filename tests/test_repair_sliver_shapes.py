@@ -128,6 +128,20 @@ def test_tunnel_rule_per_start_loop():
     assert tunnel_pairs(one_sided, [1, 2])[0] == []
 
 
+def test_lines_one_way_join_only_loops_near_for_their_size():
+    # every line wins, one way only: a tunnel when the loops are near (``near`` holds the pair), not
+    # when they lie far apart for their size (the bunny's held-out cut 14:0 in full mode)
+    one_way = {1: [(2, line(0.04)), (2, line(0.6)), (2, line(0.67))], 2: [(3, line(11.0)), (-1, line(6.0))]}
+    assert len(tunnel_pairs(one_way, [1, 2, 3], near={(1, 2)})[0]) == 3
+    chosen, notes = tunnel_pairs(one_way, [1, 2, 3], near=set())
+    assert chosen == [] and notes == ["loops 1 and 2: 3 lines join them, one way only, too far apart for a tunnel"]
+    # lines both ways: the distance does not matter
+    both = {1: [(2, line(1.8)), (2, line(1.7)), (-1, line(0.9))], 2: [(1, line(1.75)), (-1, line(1.0))]}
+    assert len(tunnel_pairs(both, [1, 2], near=set())[0]) == 3
+    # forced (tunnels "on"): every connected pair, near or not
+    assert len(tunnel_pairs(one_way, [1, 2, 3], near=set(), force=True)[0]) == 3
+
+
 def test_free_regions_and_their_reach():
     # two strips of three free vertices each, between fixed rows 0.1 apart, far from each other
     x = np.linspace(0, 0.4, 5)
