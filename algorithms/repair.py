@@ -51,6 +51,7 @@ from .mesh import Icadm, Mesh, face_normals
 from .metrics import angle_stats, min_angles, topology
 from .params import FieldParams
 from .records import Cancelled, ForceLine
+from .topology import vertex_fans
 
 DARNING = ("fan", "liepa", "liepa-fair")
 TUNNELS = ("auto", "on", "off")
@@ -877,8 +878,6 @@ def _split_pinches(V: NDArray[np.float64], F: NDArray[np.int64], n_model: int
     9.5"). Only the vertices of faces after the first ``n_model`` (the model's own, whose vertices
     normalisation left with one fan each) are read: their whole stars, and nothing else (the 56k
     faces of the closed bunny cost 40-60 ms read whole). Returns (vertices, faces, vertices split)."""
-    from .topology import vertex_fans
-
     mine = np.zeros(len(V), dtype=bool)
     mine[F[n_model:].ravel()] = True
     rows = np.flatnonzero(mine[F].any(axis=1))  # every face at such a vertex

@@ -197,10 +197,12 @@ def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int],
         lengths.append(s[-1])
     X = np.vstack(mids)
     V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
-    # only the faces that can hold a point within ON_SURFACE of the longest line of a sample: the
-    # decision below is exact, and the cost does not grow with the whole surface
-    reach = ON_SURFACE * max(lengths) + float(np.linalg.norm(V[F] - V[np.roll(F, 1, axis=1)], axis=2).max())
-    near = np.all((V[F] >= X.min(axis=0) - reach) & (V[F] <= X.max(axis=0) + reach), axis=(1, 2))
+    # the distances on the faces whose boxes meet the samples' box grown by the threshold only: a
+    # point within the threshold of a sample lies on such a face, so the decisions below are exact,
+    # and the distance query's tree holds a few faces, not the whole surface
+    reach = ON_SURFACE * max(lengths)
+    t = V[F]
+    near = np.all((t.min(axis=1) <= X.max(axis=0) + reach) & (t.max(axis=1) >= X.min(axis=0) - reach), axis=1)
     d = (point_to_surface(X, V, F[near]) if near.any() else np.full(len(X), np.inf)).reshape(len(chosen), -1)
     on = {id(ln): float(np.median(d[k])) <= ON_SURFACE * lengths[k] for k, ln in enumerate(chosen)}
     keep: list[ForceLine] = []

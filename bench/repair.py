@@ -541,10 +541,8 @@ def main(argv: list[str] | None = None) -> int:
         for label, fn in usable.items():
             status, res = run_isolated(fn, case, args.timeout)
             row: dict = {"case": case.name, "peer": label, "status": status, "load": os.getloadavg()[0]}
-            if status == "ok" and not np.isfinite(np.asarray(res[0], dtype=np.float64)).all():  # type: ignore[index]
-                # a tool that wrote NaN or infinite coordinates (MeshLib's fillHoleNicely on the scanned
-                # bunny): no output to score
-                bad = int((~np.isfinite(np.asarray(res[0], dtype=np.float64)).all(axis=1)).sum())  # type: ignore[index]
+            bad = int((~np.isfinite(np.asarray(res[0], dtype=np.float64)).all(axis=1)).sum()) if status == "ok" else 0  # type: ignore[index]
+            if bad:  # a tool that wrote NaN or infinite coordinates (MeshLib's fillHoleNicely on the scanned bunny)
                 status, res = "bad output", f"{bad} vertices with non-finite coordinates"
                 row["status"] = status
             if status == "ok":
