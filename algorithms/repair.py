@@ -35,6 +35,7 @@ from .bridge_graph import (
     walk_holes,
 )
 from .bridges import loop_radius
+from .copies import join_copies
 from .creases import (
     CreaseEnds,
     Surface,
@@ -670,6 +671,7 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     timings_note: dict[str, str] = {}
     n_before = len(work.F())
     n_input = model.mesh.n_vertices
+    pinched = n_joined = n_moved = 0  # vertices split where the surface met itself at a point; copies joined
     on_crease = np.zeros(work.n, dtype=bool)
     for ids in pinned:
         on_crease[ids] = True
@@ -847,12 +849,28 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
             movable = np.union1d(movable, np.setdiff1d(np.concatenate(beside), crease_v))
         if len(keep_still):  # a pinned vertex on a plane (a CAD face) may move in it: tangential moves stay on it
             movable = np.union1d(movable, _flat_stars(V, F, np.setdiff1d(keep_still, crease_v), 1.5))
+        # copies of one point (a pinch of the input, or patches meeting at a vertex only) joined into one
+        # vertex before the refinement, which then evens out the faces the joins moved (copies.py)
+        V, F, pinched = _split_pinches(V, F, model.mesh.n_faces)
+        joins = join_copies(V, F, n_input, n_before, held=np.union1d(keep_still, crease_v))
+        V, F, n_joined, n_moved = joins.vertices, joins.faces, joins.joined, joins.moved
+        fixed = F[:n_before]
+        ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
         q = refine_angles(V, F[n_before:], ring, locked=np.vstack(locked) if locked else None, movable=movable)
         V, F = q.vertices, np.vstack([fixed, q.faces])
     timings["darn"] = time.perf_counter() - t0
-    V, F, pinched = _split_pinches(V, F, model.mesh.n_faces)
+    V, F, late = _split_pinches(V, F, model.mesh.n_faces)
+    pinched += late
     if pinched:
         notes.append(f"{pinched} vertices where the surface met itself at a point split into copies (one per fan)")
+    joins = join_copies(V, F, n_input, n_before)
+    V, F = joins.vertices, joins.faces
+    n_joined += joins.joined
+    n_moved += joins.moved
+    if n_joined or n_moved or joins.left:
+        notes.append(f"{n_joined} copies of a point joined into one vertex"
+                     + (f", {n_moved} new vertices moved off an input vertex" if n_moved else "")
+                     + (f", {joins.left} left apart" if joins.left else ""))
     new_faces = np.arange(n_before, len(F))
     stages.append(Stage("darned", f"{len(final)} holes darned with {params.darning}: {len(F) - n_before} new faces",
                         vertices=V, faces=F, bridges=tuple(b.polyline(V) for b in bridges)))

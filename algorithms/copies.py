@@ -1,0 +1,294 @@
+"""Copies of one point joined into one vertex: the output touches itself nowhere.
+
+Normalisation splits an input vertex where islands or fans of faces meet only at it (a cut that
+leaves two holes touching at a corner), and the repair splits a vertex where its patches meet only
+at it (:func:`algorithms.repair._split_pinches`). Each copy then has one fan and the output is a
+manifold surface as written, but the copies share a position: a tool that merges vertices by
+position (the scorer, ``../shared/tools/score_repair.py``, loads the output with trimesh's
+``process=True``) sees a vertex with two fans, a changed Euler characteristic and, where both ends
+of an edge were copied, an edge with four faces. The surface the input was cut from has one vertex
+there with one fan.
+
+**(choice)** The copies are joined by contracting a path of new vertices between them: the edges
+``c = p0, p1, ..., pk = k`` (``c`` a copy, ``k`` the vertex kept, p1..pk-1 new vertices of the
+patches) are collapsed one after another into ``k``, each only if it passes the link condition
+(Dey et al. 1999, "Topology preserving edge contraction": the vertices adjacent to both ends are
+exactly the two opposite the edge), which keeps the surface's topology as written: contracting an
+arc of a surface is a homeomorphism. A face of the input is never removed (a collapsed edge has a
+new vertex at one end at least, so its two faces are patch faces) and never moves (its copy is
+renamed to the kept vertex at the same position). The patch faces that met the collapsed vertices
+now meet ``k``; the refinement that follows evens them out.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+# **(choice)** at most this many new vertices on a path that joins two copies (the copies of the
+# sweep's cuts are two or three edges apart through their patches); a longer path would drag a
+# patch's faces far across to the kept vertex
+MAX_PATH = 6
+
+
+@dataclass(frozen=True)
+class Joined:
+    """vertices, faces: after the joins (the input's rows first, in their order); joined: copies
+    joined into their kept vertex; moved: new vertices that lay on another vertex and could not be
+    joined to it, moved off it; left: copies of input vertices that could not be joined (they stay
+    separate vertices at the kept one's position)."""
+
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    joined: int
+    moved: int
+    left: int
+
+
+def coincident_groups(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> list[NDArray[np.int64]]:
+    """Groups of two or more vertices of ``faces`` at exactly one position, each sorted (the
+    smallest index first: the input's vertex, its copies appended after it)."""
+    f = np.asarray(faces, dtype=np.int64).ravel()
+    mask = np.zeros(len(vertices), dtype=bool)
+    mask[f] = True
+    used = np.flatnonzero(mask)
+    if len(used) < 2:
+        return []
+    x = np.sort(np.asarray(vertices)[used, 0])
+    if np.all(x[1:] != x[:-1]):
+        return []  # no two vertices share even their x: no group (a sort of one coordinate, not of rows)
+    _, inv, counts = np.unique(np.asarray(vertices)[used], axis=0, return_inverse=True, return_counts=True)
+    inv = inv.ravel()
+    many = np.flatnonzero(counts > 1)
+    if not len(many):
+        return []
+    order = np.argsort(inv, kind="stable")
+    starts = np.r_[0, np.cumsum(counts)]
+    return [np.sort(used[order[starts[g]:starts[g + 1]]]) for g in many]
+
+
+class _Star:
+    """The faces at each vertex of a surface being contracted (faces as a list of rows; a removed
+    face is None)."""
+
+    def __init__(self, faces: NDArray[np.int64]) -> None:
+        self.rows: list[list[int] | None] = [list(map(int, r)) for r in faces]
+        self.at: dict[int, set[int]] = {}
+        for i, r in enumerate(self.rows):
+            for v in r:
+                self.at.setdefault(v, set()).add(i)
+
+    def neighbours(self, v: int) -> set[int]:
+        out: set[int] = set()
+        for i in self.at.get(v, ()):
+            out.update(self.rows[i])
+        out.discard(v)
+        return out
+
+    def link_condition(self, u: int, k: int) -> bool:
+        """Whether the edge (u, k) has exactly two faces and the vertices adjacent to both ends are
+        exactly their third vertices (Dey et al. 1999)."""
+        both = [i for i in self.at.get(u, ()) if k in self.rows[i]]
+        if len(both) != 2:
+            return False
+        opposite = {v for i in both for v in self.rows[i] if v not in (u, k)}
+        return len(opposite) == 2 and self.neighbours(u) & self.neighbours(k) == opposite
+
+    def collapse(self, u: int, k: int) -> None:
+        """Contract the edge (u, k) into k: its two faces go, u's other faces meet k."""
+        for i in list(self.at.pop(u, ())):
+            r = self.rows[i]
+            if k in r:
+                for v in r:
+                    if v != u:
+                        self.at[v].discard(i)
+                self.rows[i] = None
+            else:
+                self.rows[i] = [k if v == u else v for v in r]
+                self.at[k].add(i)
+
+
+def _paths(star: _Star, start: int, goal: int, new: NDArray[np.bool_], limit: int) -> list[list[int]]:
+    """Shortest paths (breadth first, fewest edges first) from ``start`` to ``goal`` whose inner
+    vertices are new ones, with at most ``limit`` inner vertices; a few of each length."""
+    out: list[list[int]] = []
+    queue: deque[list[int]] = deque([[start]])
+    seen_len: dict[int, int] = {start: 0}
+    while queue and len(out) < 8:  # sequential: breadth first
+        path = queue.popleft()
+        if len(path) - 1 > limit:
+            break
+        for w in sorted(star.neighbours(path[-1])):
+            if w == goal:
+                out.append(path + [w])
+            elif new[w] and w not in path and seen_len.get(w, len(path) + 1) >= len(path):
+                seen_len[w] = len(path)
+                queue.append(path + [w])
+    return out
+
+
+def _one_fan(star: _Star, v: int) -> bool:
+    """Whether the faces at ``v`` form one closed or open fan with every edge at v in at most two faces."""
+    faces = [star.rows[i] for i in star.at.get(v, ())]
+    if not faces:
+        return True
+    nxt: dict[int, list[int]] = {}
+    for r in faces:
+        j = r.index(v)
+        a, b = r[(j + 1) % 3], r[(j + 2) % 3]
+        nxt.setdefault(a, []).append(b)
+    if any(len(x) > 1 for x in nxt.values()):
+        return False
+    # walk the link from its first vertex (any one if it is closed): it must visit every face
+    ends = {x[0] for x in nxt.values()}
+    start = next((a for a in nxt if a not in ends), next(iter(nxt)))
+    cur, steps = start, 0
+    while cur in nxt and steps <= len(faces):
+        cur = nxt[cur][0]
+        steps += 1
+        if cur == start:
+            break
+    return steps == len(faces)
+
+
+def _copy(star: _Star) -> _Star:
+    out = _Star.__new__(_Star)
+    out.rows = list(star.rows)
+    out.at = {v: set(s) for v, s in star.at.items()}
+    return out
+
+
+def _contract(star: _Star, path: list[int], keep: int, n_fixed_faces: int) -> _Star | None:
+    """``star`` with the path (c, p1, ..., keep) contracted into ``keep`` (the last inner vertex
+    first), or None where an edge fails the link condition, a face of the first ``n_fixed_faces``
+    would go, or a vertex around ``keep`` is left with more than one fan."""
+    trial = _copy(star)
+    for u in reversed(path[:-1]):
+        if not trial.link_condition(u, keep):
+            return None
+        trial.collapse(u, keep)
+    if any(r is None for r in trial.rows[:n_fixed_faces]):
+        return None
+    touched = trial.neighbours(keep) | {keep}
+    return trial if all(_one_fan(trial, v) for v in touched) else None
+
+
+def _through_faces(star: _Star, c: int, keep: int, n_fixed_faces: int, limit: int) -> _Star | None:
+    """Where no path of new vertices joins ``c`` to ``keep``: a path of patch faces f0 (at keep), ...,
+    fn (at c), each next to the one before across an edge of two patch faces (breadth first, at
+    most ``limit`` + 1 faces), gets a vertex in each face (a split into three) and the edges between
+    consecutive faces flipped, so that those vertices form a path from keep to c; that path is
+    contracted (:func:`_contract`). The vertices are never placed: they vanish into ``keep``."""
+    def patch(i: int) -> bool:
+        return i >= n_fixed_faces and star.rows[i] is not None
+
+    starts = [i for i in star.at.get(keep, ()) if patch(i)]
+    goals = {i for i in star.at.get(c, ()) if patch(i)}
+    prev: dict[int, int] = {i: -1 for i in starts}
+    queue = deque((i, 0) for i in starts)
+    end = next((i for i in starts if i in goals), None)
+    while queue and end is None:  # sequential: breadth first
+        i, d = queue.popleft()
+        if d >= limit:
+            continue
+        r = star.rows[i]
+        for k in range(3):
+            a, b = r[k], r[(k + 1) % 3]
+            across = [j for j in star.at[a] & star.at[b] if j != i]
+            if len(across) != 1 or not patch(across[0]) or across[0] in prev:
+                continue
+            j = across[0]
+            prev[j] = i
+            if j in goals:
+                end = j
+                break
+            queue.append((j, d + 1))
+    if end is None:
+        return None
+    chain = [end]
+    while prev[chain[-1]] >= 0:
+        chain.append(prev[chain[-1]])
+    chain.reverse()  # f0 at keep ... fn at c
+    trial = _copy(star)
+    nxt = max(trial.at) + 1
+    mids = []
+    for i in chain:  # split each face of the chain at a new vertex
+        a, b, d = trial.rows[i]
+        m = nxt + len(mids)
+        mids.append(m)
+        trial.rows[i] = [m, a, b]
+        trial.rows += [[m, b, d], [m, d, a]]
+        n = len(trial.rows)
+        trial.at[m] = {i, n - 2, n - 1}
+        trial.at[b].add(n - 2)
+        trial.at[d].update((n - 2, n - 1))
+        trial.at[a].add(n - 1)
+        trial.at[d].discard(i)
+    for m0, m1 in zip(mids, mids[1:]):  # flip the edge between consecutive faces: m0 - m1
+        pair = next(((i, j) for i in trial.at[m0] for j in trial.at[m1]
+                     if len(set(trial.rows[i]) & set(trial.rows[j])) == 2), None)  # the faces on the old edge
+        if pair is None:
+            return None
+        i, j = pair
+        ri, rj = trial.rows[i], trial.rows[j]
+        k = ri.index(m0)
+        u, w = ri[(k + 1) % 3], ri[(k + 2) % 3]  # face i = (m0, u, w), face j = (m1, w, u)
+        if rj[(rj.index(m1) + 1) % 3] != w:
+            return None  # inconsistent orientation across the edge
+        trial.rows[i], trial.rows[j] = [m0, u, m1], [m1, w, m0]
+        trial.at[w].discard(i)
+        trial.at[u].discard(j)
+        trial.at[m1].add(i)
+        trial.at[m0].add(j)
+    return _contract(trial, [c, *reversed(mids), keep], keep, n_fixed_faces)
+
+
+def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed: int, n_fixed_faces: int, *,
+                held: NDArray[np.int64] | None = None, max_path: int = MAX_PATH) -> Joined:
+    """Join every group of vertices at one position (:func:`coincident_groups`) into its smallest
+    index by contracting paths of new vertices (index ``n_fixed`` or more) between them (module
+    docstring). A join is kept only if every vertex it touched has one fan afterwards; otherwise
+    the copy stays as it was (a new vertex is moved off the point, halfway to the mean of its
+    neighbours), and so it does if a join would remove one of the first
+    ``n_fixed_faces`` faces (the input's). Faces are returned in their order with the removed ones
+    left out. ``held``: new vertices that must stay (crease chains) and so are on no contracted path."""
+    F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    groups = coincident_groups(vertices, F)
+    V = np.array(vertices, dtype=np.float64, copy=True)
+    if not groups:
+        return Joined(V, F.copy(), 0, 0, 0)
+    new = np.zeros(max(len(vertices), int(F.max()) + 1), dtype=bool)
+    new[n_fixed:] = True
+    new[F[:n_fixed_faces].ravel()] = False  # a vertex of an input face never moves (a split pinch's copy is one)
+    if held is not None:
+        new[np.asarray(held, dtype=np.int64)] = False
+    star = _Star(F)
+    joined = left = 0
+    moved = 0
+    for g in groups:  # sequential: each join changes the stars the next one walks
+        keep = int(g[0])
+        for c in map(int, g[1:]):
+            got = None
+            for path in _paths(star, c, keep, new, max_path):
+                got = _contract(star, path, keep, n_fixed_faces)
+                if got is not None:
+                    break
+            if got is None:  # no path of new vertices: make one through the patch faces between them
+                got = _through_faces(star, c, keep, n_fixed_faces, max_path)
+            if got is not None:
+                star = got
+                joined += 1
+            elif new[c]:
+                # a new vertex on another one (a fill clamped into a convex corner of the box, on the far
+                # side of input faces from it) that no path joins: halfway to the mean of its neighbours,
+                # so that the output does not touch itself there
+                ring = sorted(star.neighbours(c))
+                V[c] += 0.5 * (V[ring].mean(axis=0) - V[c])
+                moved += 1
+            else:
+                left += 1
+    rows = [r for r in star.rows if r is not None]
+    return Joined(V, np.asarray(rows, dtype=np.int64).reshape(-1, 3), joined, moved, left)

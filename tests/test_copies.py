@@ -1,0 +1,133 @@
+"""Copies of one point joined into one vertex (algorithms/copies.py): the output must not touch
+itself, since the scorer merges vertices by position."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from test_repair import assert_input_kept
+
+from algorithms.copies import coincident_groups, join_copies
+from algorithms.metrics import topology
+from algorithms.normalize import normalize
+from algorithms.params import FieldParams
+from algorithms.repair import RepairParams, repair
+from algorithms.topology import edge_table, euler_characteristic, vertex_fans
+from bench.repair import merge_positions
+
+
+def ring_of(F: np.ndarray, v: int) -> list[int]:
+    """The link of an interior vertex, in the order of its faces."""
+    nxt = {}
+    for r in F[(F == v).any(axis=1)]:
+        j = list(r).index(v)
+        nxt[int(r[(j + 1) % 3])] = int(r[(j + 2) % 3])
+    ring = [next(iter(nxt))]
+    while len(ring) < len(nxt):
+        ring.append(nxt[ring[-1]])
+    return ring
+
+
+def vertex_split(F: np.ndarray, v: int, new: int, a: int, b: int) -> np.ndarray:
+    """The inverse of contracting the edge (v, new): v keeps the faces on its ring from position a to
+    b, ``new`` takes the rest, and the edge between them gets its two faces (appended last)."""
+    ring = ring_of(F, v)
+    n = len(ring)
+    rows = [r for r in F.tolist() if v not in r]
+    for i in range(n):
+        owner = v if (i - a) % n < (b - a) % n else new
+        rows.append([owner, ring[i], ring[(i + 1) % n]])
+    rows += [[v, ring[b], new], [new, ring[a], v]]
+    return np.asarray(rows, dtype=np.int64)
+
+
+def copy_beyond_new_vertex(F: np.ndarray, v: int, c: int, w: int) -> np.ndarray:
+    """v expanded into the path v - w - c: c is not adjacent to v."""
+    F2 = vertex_split(F, v, w, 0, 3)
+    ring = ring_of(F2, w)
+    k = ring.index(v)
+    n = len(ring)
+    return vertex_split(F2, w, c, (k - 1) % n, (k + 2) % n)  # w keeps v and its two ring neighbours
+
+
+def closed_manifold(F: np.ndarray) -> bool:
+    return bool(np.all(edge_table(F).counts == 2)) and not vertex_fans(F)
+
+
+@pytest.fixture
+def sphere():
+    s = trimesh.creation.icosphere(1)
+    return np.asarray(s.vertices, dtype=np.float64), np.asarray(s.faces, dtype=np.int64)
+
+
+def test_a_path_of_new_vertices_between_two_copies_is_contracted_back(sphere):
+    V, F = sphere
+    n = len(V)
+    # vertex 0 expanded into 0 - w - c (w new, c a copy at vertex 0's position, as normalisation makes them)
+    c, w = n, n + 1
+    F2 = copy_beyond_new_vertex(F, 0, c, w)
+    V2 = np.vstack([V, V[0], V[0] + 0.05])
+    assert closed_manifold(F2) and euler_characteristic(F2) == 2
+    assert [list(g) for g in coincident_groups(V2, F2)] == [[0, c]]
+    # the scorer's view: merged by position, the edges from w to 0 and to c are one edge with four faces
+    _, mf = merge_positions(V2, F2, 1e-9)
+    assert edge_table(mf).counts.max() == 4
+    got = join_copies(V2, F2, n_fixed=n + 1, n_fixed_faces=0)  # c is an input vertex, w a new one
+    assert (got.joined, got.left) == (1, 0)
+    assert closed_manifold(got.faces) and euler_characteristic(got.faces) == 2
+    assert not np.isin(got.faces, [c, w]).any()
+    # the contraction undoes the two splits: the sphere's own faces, as sets
+    assert {frozenset(r) for r in got.faces.tolist()} == {frozenset(r) for r in F.tolist()}
+
+
+def test_copies_with_no_new_vertex_between_them_are_joined_through_the_patch_faces(sphere):
+    V, F = sphere
+    n = len(V)
+    c, w = n, n + 1
+    F2 = copy_beyond_new_vertex(F, 0, c, w)
+    V2 = np.vstack([V, V[0], V[0] + 0.05])
+    # w is an input vertex now: no path of new vertices; the faces away from vertex 0 are the input's
+    at = np.isin(F2, [0, c, w]).any(axis=1)
+    order = np.r_[np.flatnonzero(~at), np.flatnonzero(at)]
+    F3 = F2[order]
+    fixed = int((~at).sum())
+    got = join_copies(V2, F3, n_fixed=n + 2, n_fixed_faces=fixed)
+    assert (got.joined, got.left) == (1, 0)
+    assert closed_manifold(got.faces) and euler_characteristic(got.faces) == 2
+    assert not np.isin(got.faces, [c]).any()
+    np.testing.assert_array_equal(got.faces[:fixed], F3[:fixed])  # the input's faces, untouched, first
+
+
+def test_a_join_that_would_remove_an_input_face_is_not_made(sphere):
+    V, F = sphere
+    n = len(V)
+    c = n
+    F2 = vertex_split(F, 0, c, 0, 3)  # an edge between the copies: its two faces would go
+    V2 = np.vstack([V, V[0]])
+    got = join_copies(V2, F2, n_fixed=n + 1, n_fixed_faces=len(F2))
+    assert (got.joined, got.left) == (0, 1)
+    np.testing.assert_array_equal(got.faces, F2)
+    got = join_copies(V2, F2, n_fixed=n + 1, n_fixed_faces=len(F2) - 2)  # those two are patch faces
+    assert (got.joined, got.left) == (1, 0)
+    assert {frozenset(r) for r in got.faces.tolist()} == {frozenset(r) for r in F.tolist()}
+
+
+@pytest.mark.parametrize("name", ["box:4:1", "capsule:1:0"])
+def test_sweep_cuts_with_pinched_holes_come_back_without_copies(name):
+    """Random cuts (bench/sweep.py) that leave vertices where two holes touch: before the joins the
+    output was closed as written but kept copies of such a vertex (box 4:1: Euler 1 once merged by
+    position; capsule 1:0: an edge with four faces, three pieces), which the scorer sees."""
+    from bench.sweep import make_cut
+
+    model, seed, it = name.split(":")
+    case = make_cut(model, int(seed), int(it))
+    res = repair(normalize(case.vertices, case.faces, extra_points=case.free_points),
+                 RepairParams(field=FieldParams(mode="light")))
+    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
+    assert not coincident_groups(V, F)
+    mv, mf = merge_positions(V, F, 1e-9)
+    topo = topology(mf)
+    assert topo.watertight and topo.manifold_vertices and topo.components == 1 and topo.genus == 0
+    assert "copies of a point joined into one vertex" in res.tunnel_note
+    assert_input_kept(res.model, res.mesh)
