@@ -281,12 +281,11 @@ def score(case: BenchCase, V2: NDArray[np.float64], F2: NDArray[np.int64], *, sa
     if not len(F2):
         return {"watertight": False, "components": 0, "genus": None, "topology_right": False, "kept": 0.0}
     mv, mf = merge_positions(V2, F2, tol)
-    # topology as the tool wrote it (distinct vertices may share a position, e.g. where a
-    # non-manifold input vertex was split); if that is not closed, with coincident vertices merged
-    # (tools that duplicate vertices along a seam)
-    watertight, comps, genus = _topology(np.asarray(F2, dtype=np.int64))
-    if not watertight:
-        watertight, comps, genus = _topology(mf)
+    # topology with the vertices at one position merged, as the scorer loads an output (trimesh,
+    # process=True): copies of a point left apart (a split pinch) count as the one vertex they are
+    # in space, with two fans (the Euler characteristic drops by one, an edge between two pairs of
+    # copies has four faces)
+    watertight, comps, genus = _topology(mf)
     right = bool(watertight and comps == 1 and genus == case.genus)
     # input faces found in the output (by position, either orientation)
     tree = cKDTree(mv)
@@ -421,8 +420,9 @@ def markdown(rows: list[dict], cases: list[BenchCase], notes: list[str], samples
         "",
         "Rerun: `python -m bench.repair` (peers from the `[bench]` extra). Cases: the five demo cases "
         "(`assets/repair`) and cases cut from `../shared/data` (`bench/cases.py`), plus the real scanned "
-        "bunny (topology only). Scoring as `../shared/tools/score_repair.py`: topology of the output as "
-        "written, or with coincident vertices merged if that is not closed; "
+        "bunny (topology only). Scoring as `../shared/tools/score_repair.py`: topology of the output with "
+        "the vertices at one position merged (as the scorer loads it: copies of a point left apart count as "
+        "one vertex with two fans); "
         "topology right = watertight (closed, consistently oriented), one component and the truth's genus; "
         "kept = share of input faces found "
         "in the output; distances both ways, exact point-to-surface over "

@@ -303,7 +303,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", default="1-10", help="seeds, e.g. 1-5 or 1,4")
     ap.add_argument("--per-seed", type=int, default=2, help="cuts per model and seed")
     ap.add_argument("--models", default=",".join(MODELS), help="comma-separated: " + ", ".join(MODELS))
-    ap.add_argument("--modes", default="light,full")
+    ap.add_argument("--modes", default="light,full", help="our modes ('' for the peers only)")
     ap.add_argument("--peers", default="meshlib", help="'meshlib' or '' (none)")
     ap.add_argument("--only", help="these cuts only, MODEL:SEED:IT[,MODEL:SEED:IT...]")
     ap.add_argument("--save", help="write each cut as DIR/MODEL_SEED_IT.npz")
@@ -332,7 +332,8 @@ def main(argv: list[str] | None = None) -> int:
         todo = [(m, int(s), int(i)) for m, s, i in (c.split(":") for c in a.only.split(","))]
     else:
         todo = [(m, s, i) for s in _seeds(a.seeds) for m in a.models.split(",") for i in range(a.per_seed)]
-    methods = {f"ours-{mode}": (lambda V, F, P, mode=mode: ours_repair(V, F, P, mode)) for mode in a.modes.split(",")}
+    methods = {f"ours-{mode}": (lambda V, F, P, mode=mode: ours_repair(V, F, P, mode))
+               for mode in a.modes.split(",") if mode}  # --modes '': the peers only
     if a.peers == "meshlib":
         methods["meshlib"] = lambda V, F, P: meshlib_fill(V, F, P, "bridge")
     import algorithms.repair  # noqa: F401  (imported once here: every forked run uses the same code)
