@@ -131,3 +131,14 @@ def test_sweep_cuts_with_pinched_holes_come_back_without_copies(name):
     assert topo.watertight and topo.manifold_vertices and topo.components == 1 and topo.genus == 0
     assert "copies of a point joined into one vertex" in res.tunnel_note
     assert_input_kept(res.model, res.mesh)
+
+
+def test_vertices_a_round_off_apart_are_one_point_and_far_ones_are_not(sphere):
+    """frep-plate3 cut 12:0: a fill clamped into a convex corner landed 1.2e-16 from its input vertex;
+    the scorer merges the two, so they are one group here too."""
+    V, F = sphere
+    n = len(V)
+    V2 = np.vstack([V, V[3] + 1e-12, V[5] + 1e-3])
+    F2 = np.vstack([F, [[n, 1, 2], [n + 1, 1, 2]]])
+    assert not np.array_equal(V2[3], V2[n])
+    assert [list(g) for g in coincident_groups(V2, F2)] == [[3, n]]
