@@ -841,8 +841,6 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
                                      skip=np.concatenate([t[1] for t in tips]) if tips else None)
             if len(clamped):
                 timings_note["fairing"] += f" + {len(clamped)} vertices back inside convex surroundings"
-        fixed = F[:n_before]
-        ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
         # then Delaunay refinement for the angles (darning.refine_angles: flips first, points only
         # where a triangle stays below the angle bound and is not forced by the border)
         if beside and len(crease_v):  # chains _fair_sides moved off their force lines: the angle moves may too

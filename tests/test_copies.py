@@ -61,13 +61,18 @@ def sphere():
     return np.asarray(s.vertices, dtype=np.float64), np.asarray(s.faces, dtype=np.int64)
 
 
-def test_a_path_of_new_vertices_between_two_copies_is_contracted_back(sphere):
+@pytest.fixture
+def expanded(sphere):
+    """The sphere's vertex 0 expanded into 0 - w - c: c (index n) a copy at vertex 0's position, as
+    normalisation makes them, w (n + 1) a vertex beside it. Returns (F, V2, F2, n, c, w)."""
     V, F = sphere
     n = len(V)
-    # vertex 0 expanded into 0 - w - c (w new, c a copy at vertex 0's position, as normalisation makes them)
     c, w = n, n + 1
-    F2 = copy_beyond_new_vertex(F, 0, c, w)
-    V2 = np.vstack([V, V[0], V[0] + 0.05])
+    return F, np.vstack([V, V[0], V[0] + 0.05]), copy_beyond_new_vertex(F, 0, c, w), n, c, w
+
+
+def test_a_path_of_new_vertices_between_two_copies_is_contracted_back(expanded):
+    F, V2, F2, n, c, w = expanded
     assert closed_manifold(F2) and euler_characteristic(F2) == 2
     assert [list(g) for g in coincident_groups(V2, F2)] == [[0, c]]
     # the scorer's view: merged by position, the edges from w to 0 and to c are one edge with four faces
@@ -81,12 +86,8 @@ def test_a_path_of_new_vertices_between_two_copies_is_contracted_back(sphere):
     assert {frozenset(r) for r in got.faces.tolist()} == {frozenset(r) for r in F.tolist()}
 
 
-def test_copies_with_no_new_vertex_between_them_are_joined_through_the_patch_faces(sphere):
-    V, F = sphere
-    n = len(V)
-    c, w = n, n + 1
-    F2 = copy_beyond_new_vertex(F, 0, c, w)
-    V2 = np.vstack([V, V[0], V[0] + 0.05])
+def test_copies_with_no_new_vertex_between_them_are_joined_through_the_patch_faces(expanded):
+    _, V2, F2, n, c, w = expanded
     # w is an input vertex now: no path of new vertices; the faces away from vertex 0 are the input's
     at = np.isin(F2, [0, c, w]).any(axis=1)
     order = np.r_[np.flatnonzero(~at), np.flatnonzero(at)]
