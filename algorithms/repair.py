@@ -865,10 +865,11 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     V, F = joins.vertices, joins.faces
     n_joined += joins.joined
     n_moved += joins.moved
-    if n_joined or n_moved or joins.left:
-        notes.append(f"{n_joined} copies of a point joined into one vertex"
-                     + (f", {n_moved} new vertices moved off an input vertex" if n_moved else "")
-                     + (f", {joins.left} left apart" if joins.left else ""))
+    said = [f"{n_joined} copies of a point joined into one vertex" if n_joined else "",
+            f"{n_moved} new vertices moved off an input vertex" if n_moved else "",
+            f"{joins.left} copies of a point left apart" if joins.left else ""]
+    if any(said):
+        notes.append(", ".join(x for x in said if x))
     new_faces = np.arange(n_before, len(F))
     stages.append(Stage("darned", f"{len(final)} holes darned with {params.darning}: {len(F) - n_before} new faces",
                         vertices=V, faces=F, bridges=tuple(b.polyline(V) for b in bridges)))

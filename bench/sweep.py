@@ -286,7 +286,8 @@ def markdown(rows: list[dict], command: str) -> str:
         "frep-plate3 cuts the fine-rim walk was traced on (creases.CreaseEnds.at), and the frep-boxsphere cuts "
         "the convex clamp was traced on (darning/convex.py); each then checked on the "
         "whole sweep. "
-        "Scored as the repair benchmark scores (Hausdorff in % of the model's diagonal, sampled); "
+        "Scored as the repair benchmark scores (topology with the vertices at one position merged, as the "
+        "scorer loads an output; Hausdorff in % of the model's diagonal, sampled); "
         "\"light\"/\"full\": our repair, \"meshlib\": MeshLib's bridgeFillAllHoles on the same cut; "
         f"in the ratios MeshLib's distance counts as at least {100 * RATIO_FLOOR:g} % (it is exact on some cuts).",
         "", table(head, out)])
