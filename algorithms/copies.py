@@ -282,6 +282,8 @@ def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed
     for g in groups:  # sequential: each join changes the stars the next one walks
         keep = int(g[0])
         for c in map(int, g[1:]):
+            if not star.at.get(c):
+                continue  # contracted already, on the path of an earlier copy of this point
             if not new[c] and not np.array_equal(V[c], V[keep]):
                 left += 1  # two input vertices almost at one point: joined, an input face would move
                 continue

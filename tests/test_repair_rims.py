@@ -95,12 +95,21 @@ def test_the_angle_polish_keeps_its_points_on_the_surface_in_a_concave_corner(mo
     polish moved two points in planes its sliver stars tilted, 0.10-0.11 into the cap (3.8 % of
     the diagonal); kept within a quarter of their stars' reach from the stars' old faces (the guard
     before), 0.048; on the old faces (refine.ON_STAR), the farthest new vertex is 0.003 off. (With
-    the guards off, 0.098 since the rim's ends read its circle over notches, creases.CreaseEnds.at.)"""
+    the guards off, 0.098 since the rim's ends read its circle over notches, creases.CreaseEnds.at.)
+    Since the copies of the cut's pinched vertices are joined (algorithms/copies.py) the polish
+    meets other faces there; the guards are measured on the patches as they were before the joins."""
+    import algorithms.repair as rp
+    from algorithms.copies import Joined
+
     case = _sweep_cut("mushroom:5:0")
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
     out = repair(model, RepairParams()).mesh
     assert_input_kept(model, out)
     n_in = len(model.mesh.vertices)
+    err = point_to_surface(out.vertices[n_in:], case.truth.vertices, case.truth.faces)
+    assert err.max() < 0.01, err.max()
+    monkeypatch.setattr(rp, "join_copies", lambda V, F, *a, **k: Joined(np.array(V), np.array(F), 0, 0, 0))
+    out = repair(model, RepairParams()).mesh
     err = point_to_surface(out.vertices[n_in:], case.truth.vertices, case.truth.faces)
     assert err.max() < 0.01, err.max()
     monkeypatch.setattr(R, "ON_STAR", False)  # the guards off: as before
