@@ -31,6 +31,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from .topology import edge_table, vertex_fans
+
 # **(choice)** vertices closer than this share of the diagonal are one point (the benchmarks merge
 # at the same distance; a fill clamped into a convex corner landed 1e-16 from its input vertex on
 # frep-plate3 cut 12:0, which the scorer merges)
@@ -55,30 +57,36 @@ class Joined:
     left: int
 
 
+def close_clusters(points: NDArray[np.float64], radius: float) -> NDArray[np.int64]:
+    """(N,) a label per point: points joined by a chain of pairs at most ``radius`` apart share one
+    (connected components of the k-d tree's pairs). Where no two x coordinates lie that close (a
+    sort of one coordinate), every point is its own cluster and no tree is built."""
+    pts = np.asarray(points, dtype=np.float64)
+    n = len(pts)
+    if n < 2 or np.all(np.diff(np.sort(pts[:, 0])) > radius):
+        return np.arange(n, dtype=np.int64)
+    pairs = cKDTree(pts).query_pairs(radius, output_type="ndarray")
+    if not len(pairs):
+        return np.arange(n, dtype=np.int64)
+    _, label = connected_components(coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)),
+                                    directed=False)
+    return label.astype(np.int64)
+
+
 def coincident_groups(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
                       tol: float = COINCIDENT) -> list[NDArray[np.int64]]:
     """Groups of two or more vertices of ``faces`` within ``tol`` times the diagonal of their box of
-    one another (chains of such pairs), each sorted (the smallest index first: the input's vertex,
-    its copies appended after it)."""
-    f = np.asarray(faces, dtype=np.int64).ravel()
+    one another (:func:`close_clusters`), each sorted (the smallest index first: the input's vertex,
+    its copies appended after it), in the order of their clusters' labels."""
     mask = np.zeros(len(vertices), dtype=bool)
-    mask[f] = True
+    mask[np.asarray(faces, dtype=np.int64).ravel()] = True
     used = np.flatnonzero(mask)
     if len(used) < 2:
         return []
     pts = np.asarray(vertices, dtype=np.float64)[used]
-    r = tol * float(np.linalg.norm(np.ptp(pts, axis=0)))
-    x = np.sort(pts[:, 0])
-    if np.all(np.diff(x) > r):
-        return []  # no two vertices even that close in x: no group (a sort of one coordinate, not a tree)
-    pairs = cKDTree(pts).query_pairs(r, output_type="ndarray")
-    if not len(pairs):
-        return []
-    n = len(pts)
-    _, label = connected_components(coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)),
-                                    directed=False)
-    at = np.unique(pairs)
-    return [np.sort(used[at[label[at] == g]]) for g in np.unique(label[at])]
+    label = close_clusters(pts, tol * float(np.linalg.norm(np.ptp(pts, axis=0))))
+    counts = np.bincount(label)
+    return [np.sort(used[label == g]) for g in np.flatnonzero(counts > 1)]
 
 
 class _Star:
@@ -141,28 +149,14 @@ def _paths(star: _Star, start: int, goal: int, new: NDArray[np.bool_], limit: in
     return out
 
 
-def _one_fan(star: _Star, v: int) -> bool:
-    """Whether the faces at ``v`` form one closed or open fan with every edge at v in at most two faces."""
-    faces = [star.rows[i] for i in star.at.get(v, ())]
-    if not faces:
-        return True
-    nxt: dict[int, list[int]] = {}
-    for r in faces:
-        j = r.index(v)
-        a, b = r[(j + 1) % 3], r[(j + 2) % 3]
-        nxt.setdefault(a, []).append(b)
-    if any(len(x) > 1 for x in nxt.values()):
-        return False
-    # walk the link from its first vertex (any one if it is closed): it must visit every face
-    ends = {x[0] for x in nxt.values()}
-    start = next((a for a in nxt if a not in ends), next(iter(nxt)))
-    cur, steps = start, 0
-    while cur in nxt and steps <= len(faces):
-        cur = nxt[cur][0]
-        steps += 1
-        if cur == start:
-            break
-    return steps == len(faces)
+def _one_fan_each(star: _Star, vs: set[int]) -> bool:
+    """Whether every vertex of ``vs`` has one fan of faces (topology.vertex_fans, the definition of
+    the report's ``manifold_vertices``) and no edge at it more than two faces."""
+    rows = sorted({i for v in vs for i in star.at.get(v, ())})
+    f = np.asarray([star.rows[i] for i in rows], dtype=np.int64).reshape(-1, 3)
+    et = edge_table(f)
+    at = np.isin(et.edges, np.fromiter(vs, dtype=np.int64)).any(axis=1)
+    return not (et.counts[at] > 2).any() and not vs & set(vertex_fans(f))
 
 
 def _copy(star: _Star) -> _Star:
@@ -184,7 +178,7 @@ def _contract(star: _Star, path: list[int], keep: int, n_fixed_faces: int) -> _S
     if any(r is None for r in trial.rows[:n_fixed_faces]):
         return None
     touched = trial.neighbours(keep) | {keep}
-    return trial if all(_one_fan(trial, v) for v in touched) else None
+    return trial if _one_fan_each(trial, touched) else None
 
 
 def _through_faces(star: _Star, c: int, keep: int, n_fixed_faces: int, limit: int) -> _Star | None:

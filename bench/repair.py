@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from algorithms import metrics
+from algorithms.copies import close_clusters
 from algorithms.topology import edge_table, euler_characteristic, islands, orientation_consistent
 from bench.cases import BenchCase, all_cases
 
@@ -243,18 +244,11 @@ def run_isolated(fn: Peer, case: BenchCase, timeout: float) -> tuple[str, object
 # ---------------------------------------------------------------- scoring
 
 def merge_positions(V: NDArray[np.float64], F: NDArray[np.int64], tol: float) -> Arrays:
-    """Vertices within ``tol`` of each other merged (KD-tree clusters), unreferenced ones dropped,
-    faces that collapse dropped."""
+    """Vertices within ``tol`` of each other merged (algorithms.copies.close_clusters), unreferenced
+    ones dropped, faces that collapse dropped."""
     used = np.unique(F)
     pts = V[used]
-    tree = cKDTree(pts)
-    pairs = tree.query_pairs(tol, output_type="ndarray")
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
-    g = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(pts),) * 2) if len(pairs) \
-        else sp.coo_matrix((len(pts),) * 2)
-    _, lab = connected_components(g, directed=False)
+    lab = close_clusters(pts, tol)
     first = np.full(lab.max() + 1, -1)
     first[lab[::-1]] = np.arange(len(pts))[::-1]
     remap = np.full(len(V), -1)

@@ -143,3 +143,22 @@ def test_vertices_a_round_off_apart_are_one_point_and_far_ones_are_not(sphere):
     F2 = np.vstack([F, [[n, 1, 2], [n + 1, 1, 2]]])
     assert not np.array_equal(V2[3], V2[n])
     assert [list(g) for g in coincident_groups(V2, F2)] == [[3, n]]
+
+
+def test_close_clusters_are_the_components_of_the_pairs_within_the_radius():
+    """Brute force: the clusters are the connected components of the graph of pairs at most the
+    radius apart (the copies' groups, the darning's pinches and the benchmark's merge read them)."""
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial.distance import cdist
+
+    from algorithms.copies import close_clusters
+
+    rng = np.random.default_rng(3)
+    P = rng.random((120, 3))
+    P[60:80] = P[rng.integers(0, 60, 20)] + rng.normal(scale=1e-4, size=(20, 3))
+    r = 3e-4
+    _, want = connected_components(cdist(P, P) <= r, directed=False)
+    got = close_clusters(P, r)
+    assert len(np.unique(got)) == len(np.unique(want)) < 120
+    assert np.array_equal(got[:, None] == got[None, :], want[:, None] == want[None, :])
+    np.testing.assert_array_equal(close_clusters(P[:10], 1e-12), np.arange(10))

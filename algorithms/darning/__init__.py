@@ -50,10 +50,8 @@ from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
+from ..copies import close_clusters
 from ..mesh import Mesh, _frozen, face_cross
 from ..topology import boundary_halfedges, boundary_loops, edge_table, halfedges, vertex_fans
 from .fair import ORDERS, WEIGHTINGS, fair, tangential_relax
@@ -125,16 +123,10 @@ def pinches(vertices: NDArray[np.float64], loop: NDArray[np.int64]) -> NDArray[n
     extent); kept is the smallest index at that point (the input's vertex, copies come after it)."""
     lp = np.asarray(loop, dtype=np.int64)
     pts = np.asarray(vertices, dtype=np.float64)[lp]
-    tol = 1e-12 * float(np.ptp(pts, axis=0).max(initial=0.0))
-    if len(pts) > 1 and np.all(np.diff(np.sort(pts[:, 0])) > tol):
-        return np.zeros((0, 2), dtype=np.int64)  # no two points within tol even in x alone: no pair
-    close = cKDTree(pts).query_pairs(tol, output_type="ndarray") if len(pts) > 1 else np.zeros((0, 2), np.int64)
-    close = close[lp[close[:, 0]] != lp[close[:, 1]]]
-    if not len(close):
-        return np.zeros((0, 2), dtype=np.int64)
+    label = close_clusters(pts, 1e-12 * float(np.ptp(pts, axis=0).max(initial=0.0)))
     n = len(lp)
-    _, label = connected_components(coo_matrix((np.ones(len(close)), (close[:, 0], close[:, 1])), shape=(n, n)),
-                                    directed=False)
+    if not n or label.max() + 1 == n:
+        return np.zeros((0, 2), dtype=np.int64)  # every position a point of its own
     kept = np.full(n, np.iinfo(np.int64).max)
     np.minimum.at(kept, label, lp)
     pairs = np.unique(np.stack([lp, kept[label]], axis=1), axis=0)
