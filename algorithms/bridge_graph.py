@@ -21,13 +21,18 @@ from scipy.spatial import cKDTree
 
 from .topology import edge_table
 
+# the kinds of bridge (Bridge.kind), in the order the report and the explorer list them
+BRIDGE_KINDS = ("island", "tunnel", "split", "crease", "pinch")
+
 
 @dataclass(frozen=True, eq=False)
 class Bridge:
     """A bridge from boundary vertex ``start`` to boundary vertex ``end``.
 
     points: (K, 3) the chain's interior points, in order from start to end (may be empty).
-    kind: "island" (joins islands), "tunnel" (rebuilds a handle), "split" (splits a hole).
+    kind: "island" (joins islands), "tunnel" (rebuilds a handle), "split" (splits a hole), "crease"
+    (continues a sharp crease across a hole), "pinch" (zero-length: joins two copies of one input
+    vertex on different holes, repair._pinch_joins).
     """
 
     start: int

@@ -162,3 +162,52 @@ def test_close_clusters_are_the_components_of_the_pairs_within_the_radius():
     assert len(np.unique(got)) == len(np.unique(want)) < 120
     assert np.array_equal(got[:, None] == got[None, :], want[:, None] == want[None, :])
     np.testing.assert_array_equal(close_clusters(P[:10], 1e-12), np.arange(10))
+
+
+def test_pinch_joins_pair_copies_on_different_holes_once_each():
+    from algorithms.bridge_graph import Bridge, Hole
+    from algorithms.repair import _pinch_joins
+
+    holes = [Hole((0, 1, 2, 3)), Hole((10, 11, 12)), Hole((20, 21, 22, 23, 24))]
+    # input vertex 7: copies 1 and 11 (different holes), 8: copies 2 and 3 (one hole: the darning's),
+    # 9: three copies 12, 21, 22 (12 pairs with 21; 22 is left), 5: copies 0 and 20, 0 a bridge end
+    copies = {7: [11, 1], 8: [2, 3], 9: [22, 21, 12], 5: [0, 20]}
+    taken = [Bridge(0, 30, np.zeros((1, 3)), 1.0)]
+    got = _pinch_joins(holes, copies, taken)
+    assert sorted((b.start, b.end) for b in got) == [(1, 11), (12, 21)]
+    assert all(b.kind == "pinch" and len(b.points) == 0 for b in got)
+
+
+def test_a_tunnel_past_a_pinch_is_one_from_a_joined_loop_to_a_loop_outside_its_group():
+    from algorithms.bridge_graph import Bridge
+    from algorithms.repair import _loop_groups, _past_a_pinch
+
+    loop_of = {1: (0, 0), 2: (1, 0), 3: (1, 1), 4: (2, 0), 5: (3, 0), 6: (3, 1)}
+    joins = [Bridge(1, 2, np.zeros((0, 3)), 0.0, "pinch"), Bridge(5, 6, np.zeros((0, 3)), 0.0, "pinch")]
+    group = _loop_groups(joins, loop_of)  # loops 0 and 1 joined; 3 to itself (no group)
+    assert set(group) == {0, 1} and group[0] == group[1]
+    assert not _past_a_pinch((0, 1), group)  # a second band across the same handle
+    assert _past_a_pinch((1, 2), group) and _past_a_pinch((0, 3), group)
+    assert not _past_a_pinch((2, 3), group)
+
+
+def test_a_wall_touching_the_floor_at_pinches_is_joined_there_not_by_a_tunnel():
+    """featuretype cut 3:1 (bench/sweep.py): a ball at the foot of a through-hole took the faces
+    between the wall's slivers and the floor's rim, which then touch at 8 vertices; two more rows
+    elsewhere. Darned apart and joined afterwards, 16 copies stayed apart (edges of four faces once
+    merged by position), and the tunnel rule joined the wall's loop to the top's: genus 10 with the
+    pinches joined, truth 9."""
+    from algorithms.repair import PAST_A_PINCH
+    from bench.sweep import make_cut
+
+    case = make_cut("featuretype", 3, 1)
+    res = repair(normalize(case.vertices, case.faces, extra_points=case.free_points),
+                 RepairParams(field=FieldParams(mode="light")))
+    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
+    assert not coincident_groups(V, F)
+    mv, mf = merge_positions(V, F, 1e-9)
+    topo = topology(mf)
+    assert topo.watertight and topo.manifold_vertices and topo.components == 1 and topo.genus == 9
+    assert sum(b.kind == "pinch" for b in res.bridges) >= 16
+    assert any(why == PAST_A_PINCH for _, why in res.rejected)
+    assert_input_kept(res.model, res.mesh)

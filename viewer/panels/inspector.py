@@ -15,6 +15,8 @@ import numpy as np
 from PySide6.QtCore import QTimer
 from PySide6.QtWidgets import QTextBrowser, QVBoxLayout, QWidget
 
+from algorithms.bridge_graph import BRIDGE_KINDS
+
 
 def _v(a) -> str:
     a = np.asarray(a, dtype=float)
@@ -85,7 +87,7 @@ class InspectorPanel(QWidget):
         if r is not None:
             darned = sum(h.split_by < 0 for h in r.holes)
             split = sum(h.split_by >= 0 for h in r.holes)
-            kinds = ", ".join(f"{sum(b.kind == k for b in r.bridges)} {k}" for k in ("island", "tunnel", "split"))
+            kinds = ", ".join(f"{sum(b.kind == k for b in r.bridges)} {k}" for k in BRIDGE_KINDS)
             stage = ""
             if m.timeline_mode == "stages" and 0 <= m.stage < len(m.stages):
                 st = m.stages[m.stage]
