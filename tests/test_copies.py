@@ -29,6 +29,26 @@ def ring_of(F: np.ndarray, v: int) -> list[int]:
     return ring
 
 
+def sweep_repair(name: str, mode: str = "light"):
+    """The repair of the random cut MODEL:SEED:IT of bench/sweep.py."""
+    from bench.sweep import make_cut
+
+    model, seed, it = name.split(":")
+    case = make_cut(model, int(seed), int(it))
+    return repair(normalize(case.vertices, case.faces, extra_points=case.free_points),
+                  RepairParams(field=FieldParams(mode=mode)))
+
+
+def assert_closed_once_merged(res, genus: int) -> None:
+    """No two vertices of the output at one point, and with them merged by position (as the scorer
+    loads an output) a closed manifold in one piece of ``genus``; every input face kept."""
+    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
+    assert not coincident_groups(V, F)
+    topo = topology(merge_positions(V, F, 1e-9)[1])
+    assert topo.watertight and topo.manifold_vertices and topo.components == 1 and topo.genus == genus
+    assert_input_kept(res.model, res.mesh)
+
+
 def vertex_split(F: np.ndarray, v: int, new: int, a: int, b: int) -> np.ndarray:
     """The inverse of contracting the edge (v, new): v keeps the faces on its ring from position a to
     b, ``new`` takes the rest, and the edge between them gets its two faces (appended last)."""
@@ -119,19 +139,9 @@ def test_sweep_cuts_with_pinched_holes_come_back_without_copies(name):
     """Random cuts (bench/sweep.py) that leave vertices where two holes touch: before the joins the
     output was closed as written but kept copies of such a vertex (box 4:1: Euler 1 once merged by
     position; capsule 1:0: an edge with four faces, three pieces), which the scorer sees."""
-    from bench.sweep import make_cut
-
-    model, seed, it = name.split(":")
-    case = make_cut(model, int(seed), int(it))
-    res = repair(normalize(case.vertices, case.faces, extra_points=case.free_points),
-                 RepairParams(field=FieldParams(mode="light")))
-    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
-    assert not coincident_groups(V, F)
-    mv, mf = merge_positions(V, F, 1e-9)
-    topo = topology(mf)
-    assert topo.watertight and topo.manifold_vertices and topo.components == 1 and topo.genus == 0
+    res = sweep_repair(name)
+    assert_closed_once_merged(res, genus=0)
     assert "copies of a point joined into one vertex" in res.tunnel_note
-    assert_input_kept(res.model, res.mesh)
 
 
 def test_vertices_a_round_off_apart_are_one_point_and_far_ones_are_not(sphere):
@@ -198,16 +208,8 @@ def test_a_wall_touching_the_floor_at_pinches_is_joined_there_not_by_a_tunnel():
     merged by position), and the tunnel rule joined the wall's loop to the top's: genus 10 with the
     pinches joined, truth 9."""
     from algorithms.repair import PAST_A_PINCH
-    from bench.sweep import make_cut
 
-    case = make_cut("featuretype", 3, 1)
-    res = repair(normalize(case.vertices, case.faces, extra_points=case.free_points),
-                 RepairParams(field=FieldParams(mode="light")))
-    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
-    assert not coincident_groups(V, F)
-    mv, mf = merge_positions(V, F, 1e-9)
-    topo = topology(mf)
-    assert topo.watertight and topo.manifold_vertices and topo.components == 1 and topo.genus == 9
+    res = sweep_repair("featuretype:3:1")
+    assert_closed_once_merged(res, genus=9)
     assert sum(b.kind == "pinch" for b in res.bridges) >= 16
     assert any(why == PAST_A_PINCH for _, why in res.rejected)
-    assert_input_kept(res.model, res.mesh)
