@@ -442,7 +442,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None, ca
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
         # components no line joined that touch at a vertex: joined there (zero-length bridges)
-        for b in _shared_vertex_joins(model, frames, guard, {v for k in bridges for v in (k.start, k.end)}):
+        for b in _shared_vertex_joins(copies, guard, {v for k in bridges for v in (k.start, k.end)}):
             keep(b, None)
             notes.append(f"islands {guard.island_of[b.start]} and {guard.island_of[b.end]} joined where they "
                          f"touch (vertex {int(model.vertex_origin[b.start])})")
@@ -1117,12 +1117,13 @@ def _past_a_pinch(pair: tuple[int, int], group: dict[int, int]) -> bool:
     return (a in group or b in group) and group.get(a, -1 - a) != group.get(b, -1 - b)
 
 
-def _shared_vertex_joins(model: Icadm, frames: list, guard: TopologyGuard,
+def _shared_vertex_joins(copies: dict[int, list[int]], guard: TopologyGuard,
                          taken: set[int] = frozenset()) -> list[Bridge]:
     """Zero-length island bridges between copies of one input vertex on the loops of islands not
     yet joined (a spanning forest: each joins two components), at copies no kept bridge ends at
     (``taken``: two bridges may not share an end). Each is added to ``guard`` as it is chosen
-    (the next must see the components it joined); the caller keeps them.
+    (the next must see the components it joined); the caller keeps them. ``copies``: the loop
+    vertices by the input vertex they copy (repair's, also read by :func:`_pinch_joins`).
 
     Normalisation splits a vertex where separate fans meet, so islands that touch at a corner come
     apart there. Where no force line joined them, they are joined at that corner rather than by a
@@ -1133,16 +1134,9 @@ def _shared_vertex_joins(model: Icadm, frames: list, guard: TopologyGuard,
     closed on their own. Joined before the force lines, a thin-torus piece touching the rest at
     one end lost its handle (sweep 9:1): the band of lines at its other end, which closes the
     handle, then needed the support of a tunnel and did not have it."""
-    origin = model.vertex_origin
-    if origin is None:
-        return []
-    at: dict[int, list[int]] = {}
-    for f in frames:
-        for v in f.vertices.tolist():
-            at.setdefault(int(origin[v]), []).append(int(v))
     out: list[Bridge] = []
     used = set(taken)
-    for _, vs in sorted(at.items()):
+    for _, vs in sorted(copies.items()):
         for i, a in enumerate(vs):
             for b in vs[i + 1:]:
                 if a in used or b in used or guard.effect(a, b) != "connect":
