@@ -151,7 +151,7 @@ class RepairResult:
     tunnel_note: str = ""  # what the tunnel rule decided for each pair of loops
     attached: Attached | None = None  # set-aside fragments put back into the output (algorithms.fragments)
     copies_left: int = 0  # copies of an input vertex left apart (algorithms.copies.join_copies)
-    pinch_pairs: int = 0  # pairs of copies on different holes (_pinch_joins; joined if a bridge is "pinch")
+    pinch_pairs: int = 0  # pairs of copies on the holes, one or two (_pinch_joins; joined if a bridge is "pinch")
 
     def report(self) -> dict:
         topo = topology(self.mesh.faces)
@@ -249,11 +249,12 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
            cancel: Callable[[], bool] | None = None) -> RepairResult:
     """Repair an incomplete model into a closed surface (when its islands bound one).
 
-    Where copies of an input vertex (normalisation split it where the input touches itself) lie on
-    different holes and some are still apart in the output (the joins through the patches,
-    algorithms/copies.py, found no path), the repair runs again with those copies joined by
-    zero-length bridges before the holes are walked (:func:`_pinch_joins`), and that result is kept
-    if fewer copies are left apart in it. **(choice)** A second run, not the joins always: on the
+    Where copies of an input vertex (normalisation split it where the input touches itself) are still
+    apart in the output (on different holes, the joins through the patches, algorithms/copies.py,
+    found no path; on one hole, a split or a crease chain parted them before the darning could join
+    them), the repair runs again with the copies on the holes joined by zero-length bridges before
+    the holes are walked (:func:`_pinch_joins`), and that result is kept if fewer copies are left
+    apart in it. **(choice)** A second run, not the joins always: on the
     sweep's pinched cuts (bench/sweep.py) the joins made 16-38 copies one vertex where the joins
     through the patches could not (featuretype 3:1, annulus 4:0), but where those succeed they
     changed the bridges around the pinch and lost cuts that were right (star 2:0: a copy an island
@@ -557,13 +558,12 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None, ca
     timings["tunnels"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     holes = walk_holes(loops, bridges, chains)
-    pinch = _pinch_joins(holes, copies, bridges)
+    pinch = _pinch_joins(holes, copies, bridges, one_hole=True)
     pinch_pairs = len(pinch)
     if join_pinches and pinch:
         for b in pinch:
             keep(b, None)
-        notes.append(f"{len(pinch)} pairs of copies of a point on different holes joined there (where the input "
-                     "touches itself)")
+        notes.append(f"{len(pinch)} pairs of copies of a point joined there (where the input touches itself)")
         holes = walk_holes(loops, bridges, chains)
     # a walk that uses a bridge twice is not a disk: add the next best candidates on that walk
     for _ in range(len(pending)):
@@ -1045,10 +1045,12 @@ class _Incidence:
         return V[glob], remap[F], glob, np.r_[f0 < self.n_input, np.zeros(int(fx.sum()), dtype=bool)]
 
 
-def _pinch_joins(holes: list[Hole], copies: dict[int, list[int]], bridges: list[Bridge]) -> list[Bridge]:
+def _pinch_joins(holes: list[Hole], copies: dict[int, list[int]], bridges: list[Bridge], *,
+                 one_hole: bool = False) -> list[Bridge]:
     """Zero-length bridges ("pinch") between copies of one input vertex that lie on different holes
-    (walks of :func:`walk_holes`), at copies no bridge ends at (a vertex takes one bridge); of a
-    vertex with three copies or more, pairs in turn, each copy in one pair.
+    (walks of :func:`walk_holes`), and with ``one_hole`` on one hole too, at copies no bridge ends at
+    (a vertex takes one bridge); of a vertex with three copies or more, pairs in turn, each copy in
+    one pair.
 
     Normalisation splits an input vertex where fans of faces meet only at it (a cut left two holes
     touching there, or a ball took the faces between a wall's slivers and the rim they stand on) so
@@ -1062,7 +1064,14 @@ def _pinch_joins(holes: list[Hole], copies: dict[int, list[int]], bridges: list[
     is how the surface passes there: the walks through it then are the small holes between the
     slivers and the rim, and the darning joins the copies (a zero-length edge). Every pair is
     joined, the first between two holes makes them one walk (a handle the input has), the next
-    split it."""
+    split it.
+
+    With ``one_hole``, copies on one hole are paired too: the bridge parts the walk there into two
+    walks, each with one copy, as the darning's split at a pinch does (darning.split_pinched). The
+    difference is when: the bridge is there before the holes are split and the creases continued.
+    featuretype random cuts 1:0 and 10:0 left 4-10 copies on one hole apart, where a crease chain or
+    a split line parted the hole between two copies before its darning could join them.
+    """
     taken = {v for b in bridges for v in (b.start, b.end)}
     hole_of: dict[int, int] = {}
     for k, h in enumerate(holes):
@@ -1072,7 +1081,8 @@ def _pinch_joins(holes: list[Hole], copies: dict[int, list[int]], bridges: list[
     for vs in (sorted(vs) for vs in copies.values() if len(vs) > 1):
         free = [v for v in vs if v not in taken and v in hole_of]
         for i, a in enumerate(free):
-            b = next((b for b in free[i + 1:] if a not in taken and b not in taken and hole_of[a] != hole_of[b]), None)
+            b = next((b for b in free[i + 1:]
+                      if a not in taken and b not in taken and (one_hole or hole_of[a] != hole_of[b])), None)
             if b is not None:
                 out.append(Bridge(a, b, np.zeros((0, 3)), 0.0, "pinch"))
                 taken.update((a, b))
@@ -1432,7 +1442,13 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
         L = float(np.linalg.norm(c - a))
         vi, vj = poly[straight.i], poly[straight.j]
         an_edge = _is_edge(work.F(), vi, vj)
-        if 0 < L < 1.5 * spacing and not an_edge:
+        # from copies of the ends of a border edge (one face): once the copies merge, the crease is
+        # that edge, and a chain along it with vertices would bound a polygon of no area with it
+        # (featuretype random cut 10:0: the crease x = -2.5, z = 0 of the part, 1.25 long, beside the
+        # border edge between the other copies of its ends; three chain vertices on it, faces of 0
+        # degrees once the pinch bridges joined the copies)
+        along_copies = not an_edge and _edge_faces(work.F(), vi, vj, origin) == 1
+        if 0 < L and not an_edge and (L < 1.5 * spacing or along_copies):
             u = (c - a) / L
             off = np.linalg.norm((pts - a) - np.outer((pts - a) @ u, u), axis=1)
             if off.max(initial=0.0) <= 1e-3 * L:
