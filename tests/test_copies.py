@@ -186,6 +186,13 @@ def test_pinch_joins_pair_copies_on_different_holes_once_each():
     got = _pinch_joins(holes, copies, taken)
     assert sorted((b.start, b.end) for b in got) == [(1, 11), (12, 21)]
     assert all(b.kind == "pinch" and len(b.points) == 0 for b in got)
+    # on one hole too: 2 and 3 are paired, 21 and 22 (one hole) are the first pair of vertex 9
+    got = _pinch_joins(holes, copies, taken, one_hole=True)
+    assert sorted((b.start, b.end) for b in got) == [(1, 11), (2, 3), (12, 21)]
+    copies[9] = [22, 21]
+    assert sorted((b.start, b.end) for b in _pinch_joins(holes, copies, taken, one_hole=True)) == [
+        (1, 11), (2, 3), (21, 22)]
+    assert sorted((b.start, b.end) for b in _pinch_joins(holes, copies, taken)) == [(1, 11)]
 
 
 def test_a_tunnel_past_a_pinch_is_one_from_a_joined_loop_to_a_loop_outside_its_group():
@@ -213,3 +220,23 @@ def test_a_wall_touching_the_floor_at_pinches_is_joined_there_not_by_a_tunnel():
     assert_closed_once_merged(res, genus=9)
     assert sum(b.kind == "pinch" for b in res.bridges) >= 16
     assert any(why == PAST_A_PINCH for _, why in res.rejected)
+
+
+@pytest.mark.parametrize("mode", ["light", "full"])
+def test_copies_on_one_hole_that_a_crease_would_part_are_joined_first(mode):
+    """featuretype cut 10:0 (bench/sweep.py): the part's edge x = -2.5, z = 0 (one input edge, 1.25
+    long) is a border edge between copies of its ends, whose other copies lie on the same hole
+    across the removed face. The crease continued from those other copies parted the hole between
+    them before its darning could join them: 10 copies left apart (not closed once merged). Joined
+    by pinch bridges on the hole first, the crease from the copies is that edge: a chain with
+    vertices along it made faces of 0 degrees once the copies merged."""
+    from algorithms.metrics import min_angles
+
+    res = sweep_repair("featuretype:10:0", mode)
+    assert_closed_once_merged(res, genus=9)
+    assert res.copies_left == 0 and sum(b.kind == "pinch" for b in res.bridges) >= 20
+    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
+    assert min_angles(V, F[res.new_faces]).min() > 1.0
+    P = res.model.mesh.vertices  # the bridges' ends are the model's vertices
+    along = [b for b in res.bridges if b.kind == "crease" and np.allclose(P[[b.start, b.end]][:, [0, 2]], [-2.5, 0])]
+    assert along and all(len(b.points) == 0 for b in along)
