@@ -228,13 +228,14 @@ def test_copies_on_one_hole_that_a_crease_would_part_are_joined_first(mode):
     long) is a border edge between copies of its ends, whose other copies lie on the same hole
     across the removed face. The crease continued from those other copies parted the hole between
     them before its darning could join them: 10 copies left apart (not closed once merged). Joined
-    by pinch bridges on the hole first, the crease from the copies is that edge: a chain with
-    vertices along it made faces of 0 degrees once the copies merged."""
+    by pinch bridges on the hole first (the repair's third run), the crease from the copies is that
+    edge: a chain with vertices along it made faces of 0 degrees once the copies merged."""
     from algorithms.metrics import min_angles
 
     res = sweep_repair("featuretype:10:0", mode)
     assert_closed_once_merged(res, genus=9)
     assert res.copies_left == 0 and sum(b.kind == "pinch" for b in res.bridges) >= 20
+    assert "first run" in res.timings  # the kept run is a later one (the third: pinches on one hole)
     V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
     assert min_angles(V, F[res.new_faces]).min() > 1.0
     P = res.model.mesh.vertices  # the bridges' ends are the model's vertices

@@ -575,7 +575,9 @@ def test_fragments_standing_on_a_rim_join_the_gap_they_stand_in():
     and manifold in both modes, every input face kept. The islands also touch at 38 vertices whose
     copies the joins through the patches left apart (not closed once merged by position, as the
     scorer loads it); the run with those pinches joined leaves none: genus 1 in full mode, as the
-    truth, and 2 in light mode (genus 1 as written with the copies apart)."""
+    truth, and 2 in light mode (genus 1 as written with the copies apart). That is the second run
+    (the pinches between different holes): it leaves no copy, so no third is made (joined in the
+    second run as well, the pinches on one hole moved the patches: Hausdorff 0.22 -> 1.31 %)."""
     model = annulus_cut([(2204, 0.18643152622075815), (4485, 0.1367235661212496), (4670, 0.139358759821132),
                          (5651, 0.295550981874801)],
                         ([1.0024269805867294, 0.7146943411145676, -0.5935466183426229], -0.3862205516363897,
@@ -589,6 +591,7 @@ def test_fragments_standing_on_a_rim_join_the_gap_they_stand_in():
         assert topology(res.mesh.faces).manifold_vertices
         assert_input_kept(model, res.mesh, fragments=True)
         assert res.copies_left == 0 and sum(b.kind == "pinch" for b in res.bridges) >= 38
+        assert "first run" in res.timings and "third run" not in res.timings
         merged = topology(merge_positions(np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces), 1e-9)[1])
         assert merged.watertight and merged.manifold_vertices and merged.genus == genus
 
