@@ -32,7 +32,7 @@ class Bridge:
     points: (K, 3) the chain's interior points, in order from start to end (may be empty).
     kind: "island" (joins islands), "tunnel" (rebuilds a handle), "split" (splits a hole), "crease"
     (continues a sharp crease across a hole), "pinch" (zero-length: joins two copies of one input
-    vertex on different holes, repair._pinch_joins).
+    vertex on the holes, repair._pinch_joins).
     """
 
     start: int

@@ -569,8 +569,9 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None, ca
     timings["tunnels"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     holes = walk_holes(loops, bridges, chains)
-    pinch_pairs, pinch_pairs_all = (len(_pinch_joins(holes, copies, bridges, one_hole=k)) for k in (False, True))
-    pinch = _pinch_joins(holes, copies, bridges, one_hole=one_hole) if join_pinches else []
+    paired = {k: _pinch_joins(holes, copies, bridges, one_hole=k) for k in (False, True)}
+    pinch_pairs, pinch_pairs_all = len(paired[False]), len(paired[True])
+    pinch = paired[one_hole] if join_pinches else []
     if pinch:
         for b in pinch:
             keep(b, None)
@@ -1080,7 +1081,7 @@ def _pinch_joins(holes: list[Hole], copies: dict[int, list[int]], bridges: list[
     With ``one_hole``, copies on one hole are paired too: the bridge parts the walk there into two
     walks, each with one copy, as the darning's split at a pinch does (darning.split_pinched). The
     difference is when: the bridge is there before the holes are split and the creases continued.
-    featuretype random cuts 1:0 and 10:0 left 4-10 copies on one hole apart, where a crease chain or
+    featuretype random cuts 1:0 and 10:0 left 2-10 copies on one hole apart, where a crease chain or
     a split line parted the hole between two copies before its darning could join them.
     """
     taken = {v for b in bridges for v in (b.start, b.end)}
