@@ -196,13 +196,24 @@ def test_a_fillet_s_two_ends_are_not_joined_the_long_way_round(monkeypatch):
     """bench/sweep.py cut featuretype:8:1 (light mode): the two ends of a pocket corner's fillet
     arc, whose short arc the cut left, each continue the fillet's circle into the hole; with every
     arc joined (concave ones too), the chain ran 270 degrees round the circle, off the part: 10.5 %
-    of the diagonal. No arc longer than half its circle (creases.MAX_ARC): 3.6 %."""
+    of the diagonal. No arc longer than half its circle (creases.MAX_ARC): 3.5 %. That is the
+    repair's first run (38 copies apart); the run kept, with the pinches on one hole joined too
+    (repair._pinch_joins), parts that hole at the pinches and no arc runs round it there: 3.6 %
+    with the rule or without it. So the rule is checked on the first run."""
     import algorithms.creases as C
+    from algorithms.repair import _repair
 
     case = _sweep_cut("featuretype:8:1")
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
     h = _hausdorff(case, model)  # the genus is wrong on this cut (6 for 9: README, known limits)
     assert h < 0.045, h
+
+    def first_run() -> float:
+        out = _repair(model, RepairParams(), progress=None, cancel=None, join_pinches=False).mesh
+        assert_input_kept(model, out)
+        return distances(out.vertices, out.faces, case.truth.vertices, case.truth.faces).hausdorff
+
+    assert first_run() < 0.045
     monkeypatch.setattr(C, "MAX_ARC", 360.0)
-    h = _hausdorff(case, model)
+    h = first_run()
     assert h > 0.08, h
