@@ -257,11 +257,13 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     zero-length bridges before the holes are walked (:func:`_pinch_joins`), and that result is kept
     if fewer copies are left apart in it. Where copies are still apart after that, it runs a third
     time with the copies on one hole joined that way too (a split or a crease chain parted them
-    before the darning could join them), kept on the same terms. **(choice)** A second run, not the joins always: on the
-    sweep's pinched cuts (bench/sweep.py) the joins made 16-38 copies one vertex where the joins
-    through the patches could not (featuretype 3:1, annulus 4:0), but where those succeed they
-    changed the bridges around the pinch and lost cuts that were right (star 2:0: a copy an island
-    bridge ended at was left apart)."""
+    before the darning could join them), kept on the same terms.
+
+    **(choice)** A second run, not the joins always: on the sweep's pinched cuts (bench/sweep.py)
+    the joins made 16-38 copies one vertex where the joins through the patches could not
+    (featuretype 3:1, annulus 4:0), but where those succeed they changed the bridges around the
+    pinch and lost cuts that were right (star 2:0: a copy an island bridge ended at was left
+    apart)."""
     best = first = _repair(model, params, progress=progress, cancel=cancel, join_pinches=False)
     made = {"first run": first}
     runs = [("second run", False, "the pinches joined", first.pinch_pairs),
@@ -280,8 +282,9 @@ def repair(model: Icadm, params: RepairParams = RepairParams(), *, progress: Pro
     return best
 
 
-def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None, cancel: Callable[[], bool] | None,
-            join_pinches: bool, one_hole: bool = False) -> RepairResult:
+def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = None,
+            cancel: Callable[[], bool] | None = None, join_pinches: bool = False, one_hole: bool = False
+            ) -> RepairResult:
     """repair(), one run; ``join_pinches``: copies of an input vertex on different holes are joined by
     zero-length bridges (:func:`_pinch_joins`), and tunnels past them are refused (:func:`_past_a_pinch`);
     with ``one_hole``, copies on one hole too."""
@@ -1093,8 +1096,9 @@ def _pinch_joins(holes: list[Hole], copies: dict[int, list[int]], bridges: list[
     for vs in (sorted(vs) for vs in copies.values() if len(vs) > 1):
         free = [v for v in vs if v not in taken and v in hole_of]
         for i, a in enumerate(free):
-            b = next((b for b in free[i + 1:]
-                      if a not in taken and b not in taken and (one_hole or hole_of[a] != hole_of[b])), None)
+            if a in taken:
+                continue
+            b = next((b for b in free[i + 1:] if b not in taken and (one_hole or hole_of[a] != hole_of[b])), None)
             if b is not None:
                 out.append(Bridge(a, b, np.zeros((0, 3)), 0.0, "pinch"))
                 taken.update((a, b))
@@ -1108,19 +1112,17 @@ PAST_A_PINCH = "from a loop the input joins to another loop at a pinch: the hand
 def _loop_groups(joins: list[Bridge], loop_of: dict[int, tuple[int, int]]) -> dict[int, int]:
     """loop -> a label shared by the loops that ``joins`` join (connected components), for the loops
     of joins between two different loops only."""
-    parent: dict[int, int] = {}
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
 
-    def find(i: int) -> int:
-        while parent.setdefault(i, i) != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for b in joins:
-        la, lb = loop_of[b.start][0], loop_of[b.end][0]
-        if la != lb:
-            parent[find(la)] = find(lb)
-    return {k: find(k) for k in parent}
+    pairs = np.array([(loop_of[b.start][0], loop_of[b.end][0]) for b in joins], dtype=np.int64).reshape(-1, 2)
+    pairs = pairs[pairs[:, 0] != pairs[:, 1]]
+    if not len(pairs):
+        return {}
+    n = int(pairs.max()) + 1
+    _, label = connected_components(coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)),
+                                    directed=False)
+    return {int(k): int(label[k]) for k in np.unique(pairs)}
 
 
 def _past_a_pinch(pair: tuple[int, int], group: dict[int, int]) -> bool:
@@ -1454,12 +1456,13 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
         L = float(np.linalg.norm(c - a))
         vi, vj = poly[straight.i], poly[straight.j]
         an_edge = _is_edge(work.F(), vi, vj)
+        between = _edge_faces(work.F(), vi, vj, origin)  # faces on an edge between copies of vi and vj
         # from copies of the ends of a border edge (one face): once the copies merge, the crease is
         # that edge, and a chain along it with vertices would bound a polygon of no area with it
         # (featuretype random cut 10:0: the crease x = -2.5, z = 0 of the part, 1.25 long, beside the
         # border edge between the other copies of its ends; three chain vertices on it, faces of 0
         # degrees once the pinch bridges joined the copies)
-        along_copies = not an_edge and _edge_faces(work.F(), vi, vj, origin) == 1
+        along_copies = not an_edge and between == 1
         if 0 < L and not an_edge and (L < 1.5 * spacing or along_copies):
             u = (c - a) / L
             off = np.linalg.norm((pts - a) - np.outer((pts - a) @ u, u), axis=1)
@@ -1468,7 +1471,7 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
                 # halve an edge already shorter than the spacing (featuretype: 0.019 chain edges
                 # beside 0.25 border edges, 3 degree triangles)
                 pts = pts[:0]
-        if not len(pts) and (an_edge or _edge_faces(work.F(), vi, vj, origin) >= 2):
+        if not len(pts) and (an_edge or between >= 2):
             # a bare crease chord between the ends of an edge is that edge; between copies of the
             # ends of an inner edge (two faces), it is that edge once the copies merge (featuretype
             # random cut 3:0: from a copy of a vertex to its neighbour along their input edge, four

@@ -236,6 +236,8 @@ def test_copies_on_one_hole_that_a_crease_would_part_are_joined_first(mode):
     assert_closed_once_merged(res, genus=9)
     assert res.copies_left == 0 and sum(b.kind == "pinch" for b in res.bridges) >= 20
     assert "first run" in res.timings  # the kept run is a later one (the third: pinches on one hole)
+    # the third: its pinch bridges are every pair on the holes, of which none lies on two holes
+    assert sum(b.kind == "pinch" for b in res.bridges) == res.pinch_pairs_all > res.pinch_pairs == 0
     V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
     assert min_angles(V, F[res.new_faces]).min() > 1.0
     P = res.model.mesh.vertices  # the bridges' ends are the model's vertices

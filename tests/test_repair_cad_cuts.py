@@ -90,8 +90,7 @@ def test_tunnel_between_two_small_loops_keeps_two_bridges():
     assert all(np.linalg.norm(ends[0][k] - ends[1][k]) >= radius for k in (id(fa), id(fb)))
     t = topology(res.mesh.faces)
     assert t.watertight and t.components == 1 and before.genus == 6
-    first = _repair(model, RepairParams(field=FieldParams(mode="light")), progress=None, cancel=None,
-                    join_pinches=False)
+    first = _repair(model, RepairParams(field=FieldParams(mode="light")))  # the pinches' copies apart
     assert topology(first.mesh.faces).genus == before.genus + 1
     assert any(b.kind == "pinch" for b in res.bridges) and res.copies_left < first.copies_left
     assert_input_kept(model, res.mesh, fragments=True)

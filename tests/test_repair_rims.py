@@ -209,7 +209,7 @@ def test_a_fillet_s_two_ends_are_not_joined_the_long_way_round(monkeypatch):
     assert h < 0.045, h
 
     def first_run() -> float:
-        out = _repair(model, RepairParams(), progress=None, cancel=None, join_pinches=False).mesh
+        out = _repair(model, RepairParams()).mesh
         assert_input_kept(model, out)
         return distances(out.vertices, out.faces, case.truth.vertices, case.truth.faces).hausdorff
 

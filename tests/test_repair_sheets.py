@@ -92,7 +92,7 @@ def test_lines_through_a_sheet_between_two_loops_join_neither(monkeypatch):
     assert "loops 3 and 4: 9 lines join them, beaten" in res.tunnel_note
     assert_input_kept(model, res.mesh)
     params = RepairParams(field=FieldParams(mode="light"))
-    assert topology(_repair(model, params, progress=None, cancel=None, join_pinches=False).mesh.faces).genus == 9
+    assert topology(_repair(model, params).mesh.faces).genus == 9
     monkeypatch.setattr(rf, "through_sheet", lambda *a, **k: False)
-    res = _repair(model, params, progress=None, cancel=None, join_pinches=False)
+    res = _repair(model, params)  # the first run
     assert topology(res.mesh.faces).genus == 10
