@@ -179,3 +179,25 @@ def test_split_chord_between_copies_of_an_edge_gets_a_vertex():
     # their own holes: the tunnel rule of spec §6 step 2 says no)
     assert t.watertight and t.oriented and t.components == 1 and t.genus == 8
     assert_input_kept(model, res.mesh, fragments=True)
+
+
+def test_a_split_line_along_a_kept_wall_is_refused():
+    """A band across the part (y = 0, width 3 % of the diagonal) takes the top and both end walls
+    of the block at x 0.134..0.397, z 1.175..1.375, and keeps its side walls y = +-0.132. The hole
+    round the block was split by a force line from corner to corner along the foot of the side wall
+    y = 0.132: it runs on that wall's input edge, so it cut off a hole the shape of the wall, filled
+    as a second sheet over it, and the rest of the block was darned as one saddle (2.1 % of the
+    diagonal off the truth). A line whose middle runs on the input surface does not cross the hole
+    (repair_field.runs_on_surface): split_line takes the next one (0.4 %; MeshLib's bridge fill 0.2 %)."""
+    from algorithms.metrics import distances
+
+    part = Mesh(*load_raw(data_file("featuretype.stl")))
+    width = 0.03 * part.bbox_diagonal()
+    case = cut(part, np.abs(face_centroids(part)[:, 1] - part.vertices[:, 1].mean()) < width / 2,
+               name="featuretype band", description="")
+    model = normalize(case.incomplete.vertices, case.incomplete.faces)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.oriented and t.components == 1 and t.genus == 9
+    assert_input_kept(model, res.mesh)
+    assert distances(res.mesh.vertices, res.mesh.faces, part.vertices, part.faces).hausdorff < 0.01

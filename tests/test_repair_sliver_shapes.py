@@ -194,6 +194,57 @@ def test_a_tunnel_whose_every_line_runs_on_the_surface_is_none():
     assert len(kept) == 2
 
 
+def test_a_split_line_that_cuts_off_input_faces_is_told_from_one_across_a_hole():
+    """repair_field._cuts_off_input on the unit square of 5 x 5 cells with its middle cell's two
+    faces removed (a hole [0.4, 0.6]^2). A line across the hole (its middle in the gap) cuts off
+    nothing; a line along the hole's own border runs on no face away from it; a line over kept
+    faces between two corners of a walk round them (the featuretype block's side wall,
+    test_repair_cad_cuts.py) runs on the surface and cuts off a polygon of input faces."""
+    from algorithms.boundary import frame_of
+    from algorithms.repair_field import _covers_input, _cuts_off_input, runs_on_surface
+
+    g = np.linspace(0.0, 1.0, 6)
+    V = np.array([(x, y, 0.0) for y in g for x in g])
+    cells = [(i, j) for j in range(5) for i in range(5) if (i, j) != (2, 2)]
+    F = np.array([f for i, j in cells for f in ((j * 6 + i, j * 6 + i + 1, j * 6 + i + 7),
+                                                (j * 6 + i, j * 6 + i + 7, j * 6 + i + 6))])
+    mesh = Mesh(V, F)
+    hole = np.array([14, 20, 21, 15])  # the middle cell's corners (0.4..0.6), walked with the surface on the left
+    frame = frame_of(V[hole], np.tile([0.0, 0.0, 1.0], (4, 1)), hole)
+
+    def line(a, b, n=9):
+        t = np.linspace(0.0, 1.0, n)[:, None]
+        pts = V[a] + t * (V[b] - V[a])
+        return ForceLine(pts, pts * 0, pts * 0, np.ones(n), ARRIVED, a, 0, b, 0)
+
+    across = line(14, 21)  # the hole's diagonal: its middle in the gap
+    assert not runs_on_surface([across], mesh, border=V[hole])[0]
+    assert not _cuts_off_input(across, frame, 0, 2, mesh)
+    along = line(14, 20)  # on the hole's border edge: on input faces only beside the hole
+    assert runs_on_surface([along], mesh)[0] and not runs_on_surface([along], mesh, border=V[hole])[0]
+    # a square of kept faces [0.6, 1] x [0.6, 1]: its border covers input faces, the hole's does not
+    assert _covers_input(V[[21, 23, 35, 33]], mesh) and not _covers_input(V[hole], mesh)
+    # a walk from the hole's corner 21 round that square and back, closed by a line over it from
+    # 23 to 33 (the walk is the hole's polygon here): the line runs on faces away from the walk
+    # and cuts off the square
+    walk = np.array([21, 22, 23, 29, 35, 34, 33, 27])
+    wframe = frame_of(V[walk], np.tile([0.0, 0.0, 1.0], (len(walk), 1)), walk)
+    over = line(23, 33)
+    assert runs_on_surface([over], mesh, border=V[walk])[0]
+    assert _cuts_off_input(over, wframe, 2, 6, mesh)
+    # a sawtooth: teeth (b_k, b_k+1, t_k) between the rows b (y <= 0) and t (y = 1) and the triangles
+    # (t_k, b_k+1, t_k+1) between them; the zigzag b0 t0 b1 t1 b2 t2 b3 bounds the teeth. It covers
+    # input faces where the teeth are kept, not where the triangles between them are (a gap along a
+    # row of slivers: the annulus sweep cut 4:0, where a fan from the centroid read both as covered)
+    k = np.arange(4.0)  # the row b bowed (collinear points make triangles the fill avoids)
+    b, t = np.c_[k, -0.1 * k * (3 - k), np.zeros(4)], np.c_[np.arange(3.0) + 0.5, np.ones(3), np.zeros(3)]
+    P = np.vstack([b, t])  # b_k = k, t_k = 4 + k
+    teeth = np.array([[k, k + 1, 4 + k] for k in range(3)])
+    gaps = np.array([[4 + k, k + 1, 5 + k] for k in range(2)])
+    zigzag = P[[0, 4, 1, 5, 2, 6, 3]]
+    assert _covers_input(zigzag, Mesh(P, teeth)) and not _covers_input(zigzag, Mesh(P, gaps))
+
+
 def test_coarse_cone_two_holes_joined_by_lines_along_its_surface_get_no_handle():
     """bench/sweep.py's coarse cone, cut 13:1 (a seed no rule was tuned on), light mode: three lines
     (q 0.49, one way, all winning) from a loop of 7 vertices to a loop of 6 ran along the surface
