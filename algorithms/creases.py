@@ -38,6 +38,7 @@ class CreaseEnds:
     edges: dict[int, list[NDArray[np.float64]]] = field(default_factory=dict)  # normal pairs of all sharp edges
     moved: dict[int, set[int]] = field(default_factory=dict)  # border vertex -> the ends ``at`` moved to it
     followed: set[int] = field(default_factory=set)  # ends whose crease the border follows into another (``at``)
+    joined: set[frozenset[int]] = field(default_factory=set)  # pairs of border vertices a crease chain joins
 
     def at(self, polygon: tuple[int, ...], V: NDArray[np.float64] | None = None,
            along: float = 12.0) -> list[tuple[int, NDArray[np.float64], NDArray[np.float64], Circle | None]]:

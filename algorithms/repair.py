@@ -1418,6 +1418,13 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
     flat = float(np.abs((border - centre) @ normal).max()) <= FLAT_HOLE * width
 
     def valid(i: int, j: int, pts: NDArray[np.float64]) -> bool:
+        if j >= 0 and frozenset((poly[i], poly[j])) in ends.joined:
+            # a crease is continued once: the face planes that stay at a used end (CreaseEnds.use)
+            # gave crease_line the same crease again in each half of the hole it had split, beside
+            # the chain that is its first continuation (featuretype with 4 % of its faces removed at
+            # random: a bent chain across a two-face hole, then a straight chord on each side of it;
+            # two faces of no area back to back, an edge with four faces)
+            return False
         end = V[poly[j]] if j >= 0 else pts[-1]
         if flat and len(pts) and float(np.abs((np.asarray(pts) - centre) @ normal).max()) > 2 * FLAT_HOLE * width:
             return False
@@ -1438,6 +1445,7 @@ def _continue_creases(work: _Work, poly: tuple[int, ...], ends: CreaseEnds, spac
                                        or surface.touched_by(V[poly[i]], pts, end, tol))
 
     def chain(i: int, j: int, pts: NDArray[np.float64], q: float, p: tuple[int, ...]):
+        ends.joined.add(frozenset((p[i], p[j])))
         N = work.N()
         nrm = (N[p[i]] + N[p[j]]) / 2
         ids = work.add_vertices(pts, np.repeat(nrm[None], len(pts), axis=0))
