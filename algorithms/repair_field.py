@@ -244,12 +244,17 @@ def _fill(points: NDArray[np.float64]) -> NDArray[np.int64]:
     return tri
 
 
-def _to_polygon(X: NDArray[np.float64], P: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(N,) distance from each point of X to the closed polygon P (K, 3): to its nearest edge."""
+def _to_polygon(X: NDArray[np.float64], P: NDArray[np.float64], *, block: int = 256) -> NDArray[np.float64]:
+    """(N,) distance from each point of X to the closed polygon P (K, 3): to its nearest edge (``block``
+    points at a time: (block, K, 3) arrays, not (N, K, 3) for a fill of a polygon of thousands)."""
     a, ab = P, np.roll(P, -1, axis=0) - P
-    t = np.clip(np.einsum("nkj,kj->nk", X[:, None] - a[None], ab) / np.maximum(np.einsum("kj,kj->k", ab, ab), 1e-300),
-                0.0, 1.0)
-    return np.linalg.norm(X[:, None] - (a[None] + t[..., None] * ab[None]), axis=2).min(axis=1)
+    ll = np.maximum(np.einsum("kj,kj->k", ab, ab), 1e-300)
+    out = np.empty(len(X))
+    for s in range(0, len(X), block):
+        x = X[s:s + block, None] - a[None]
+        t = np.clip(np.einsum("nkj,kj->nk", x, ab) / ll, 0.0, 1.0)
+        out[s:s + block] = np.linalg.norm(x - t[..., None] * ab[None], axis=2).min(axis=1)
+    return out
 
 
 def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int],

@@ -245,6 +245,23 @@ def test_a_split_line_that_cuts_off_input_faces_is_told_from_one_across_a_hole()
     assert _covers_input(zigzag, Mesh(P, teeth)) and not _covers_input(zigzag, Mesh(P, gaps))
 
 
+def test_distance_to_a_polygon_against_brute_force():
+    """repair_field._to_polygon (points to a closed polygon's nearest edge, in blocks of points)
+    against a loop over every point and edge."""
+    from algorithms.repair_field import _to_polygon
+
+    rng = np.random.default_rng(1)
+    P, X = rng.normal(size=(30, 3)), rng.normal(size=(70, 3))
+    want = np.full(len(X), np.inf)
+    for k in range(len(P)):
+        a, b = P[k], P[(k + 1) % len(P)]
+        for n, x in enumerate(X):
+            t = np.clip((x - a) @ (b - a) / ((b - a) @ (b - a)), 0.0, 1.0)
+            want[n] = min(want[n], np.linalg.norm(x - (a + t * (b - a))))
+    assert np.allclose(_to_polygon(X, P), want, atol=1e-12)
+    assert np.allclose(_to_polygon(X, P, block=8), want, atol=1e-12)
+
+
 def test_coarse_cone_two_holes_joined_by_lines_along_its_surface_get_no_handle():
     """bench/sweep.py's coarse cone, cut 13:1 (a seed no rule was tuned on), light mode: three lines
     (q 0.49, one way, all winning) from a loop of 7 vertices to a loop of 6 ran along the surface
