@@ -213,9 +213,11 @@ COVER_DP = 400  # _covers_input: polygons up to this many vertices are triangula
 def _covers_input(points: NDArray[np.float64], mesh: Mesh) -> bool:
     """Whether the closed polygon ``points`` (K, 3) bounds surface that is there: filled as the
     darning would start (the minimum-area triangulation, darning/liepa.py), most of the fill's area
-    has its triangles' centroids on ``mesh`` (within ON_SURFACE of the polygon's diameter) and four
-    times nearer to it than to the polygon itself. Filled, such a polygon would be a second sheet on
-    input faces.
+    has its triangles' centroids on ``mesh`` (within ON_SURFACE of the polygon's diameter), farther
+    than that from the polygon itself and four times nearer to the mesh than to it. Filled, such a
+    polygon would be a second sheet on input faces. A polygon whose fill is no wider on average than
+    that tolerance (a row of nearly collinear border points and a line back along them: the held-out
+    sweep cut cylinder-sub:11:1, a cap's border) covers nothing.
 
     A thin hole (a gap along a row of slivers) has its centroids as near the input faces round it as
     to its own border: it is missing surface (sweep cut mushroom:2:0, a gap 0.003 from the faces
@@ -226,10 +228,13 @@ def _covers_input(points: NDArray[np.float64], mesh: Mesh) -> bool:
     x = points[tri].mean(axis=1)
     area = 0.5 * np.linalg.norm(np.cross(points[tri[:, 1]] - points[tri[:, 0]], points[tri[:, 2]] - points[tri[:, 0]]),
                                 axis=1)
-    tol = ON_SURFACE * float(np.linalg.norm(np.ptp(points, axis=0)))
-    d = _near_surface(x, mesh, tol)
-    on = (d <= tol) & (4 * d <= _to_polygon(x, points))
-    return bool(area[on].sum() >= 0.5 * area.sum() > 0)
+    diameter = float(np.linalg.norm(np.ptp(points, axis=0)))
+    tol = ON_SURFACE * diameter
+    if area.sum() <= tol * diameter:  # a sliver no wider than the tolerance covers nothing
+        return False
+    d, to_border = _near_surface(x, mesh, tol), _to_polygon(x, points)
+    on = (d <= tol) & (to_border > tol) & (4 * d <= to_border)
+    return bool(area[on].sum() >= 0.5 * area.sum())
 
 
 def _fill(points: NDArray[np.float64]) -> NDArray[np.int64]:
