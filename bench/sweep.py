@@ -1,7 +1,8 @@
 """Random-cut sweep: the repair on many cuts it was not tuned on, beside MeshLib's bridge fill.
 
     python -m bench.sweep [--seeds 1-10] [--per-seed 2] [--models a,b] [--modes light,full]
-                          [--peers meshlib] [--only MODEL:SEED:IT] [--save DIR] [--out F.jsonl] [--write]
+                          [--styles balls,cross,speckle] [--peers meshlib] [--only MODEL[+STYLE]:SEED:IT]
+                          [--save DIR] [--out F.jsonl] [--write]
 
 The bench cases (bench/cases.py) are fixed; this makes new ones "the same way" (balls of faces
 and slabs removed from a closed model, free points sampled on what was removed) from a seed, so a
@@ -9,7 +10,9 @@ change can be checked against cases nobody looked at while making it. Each cut i
 method: topology right (watertight, one component, the model's genus), the share of input faces
 kept, Hausdorff distance to the model (fraction of its diagonal), the unforced min patch angle and
 the wall time (scored as bench/repair.py scores). A cut is named MODEL:SEED:IT; ``--only`` re-runs
-one, ``--save`` writes it (vertices, faces, free points, truth) as an .npz for debugging.
+one, ``--save`` writes it (vertices, faces, free points, truth) as an .npz for debugging. Other cut
+styles (``--styles``, :func:`make_cut`): crossing slabs and faces removed at random, the kinds of
+cut the rules were not made on (MODEL+cross:SEED:IT, MODEL+speckle:SEED:IT).
 
 Not part of the test suite (minutes per seed); compare two runs' --out files with --compare.
 """
@@ -166,23 +169,48 @@ MODELS = {
 }
 
 
-def make_cut(model: str, seed: int, it: int) -> BenchCase:
-    """One random cut: 1-4 balls (radius 3-9 % of the diagonal) at random vertices, and with
-    probability 1/2 a slab (width 1.5-3 %) through a random vertex; 100 free points on the
-    removed part with probability 1/2."""
+STYLES = ("balls", "cross", "speckle")  # how make_cut removes faces (the name of a cut not by balls says it)
+
+
+def make_cut(model: str, seed: int, it: int, style: str = "balls") -> BenchCase:
+    """One random cut.
+
+    ``balls`` (the sweep's own, named MODEL:SEED:IT): 1-4 balls (radius 3-9 % of the diagonal) at
+    random vertices, and with probability 1/2 a slab (width 1.5-3 %) through a random vertex.
+    ``cross`` (MODEL+cross:SEED:IT): two slabs (width 1.5-3 %) through a point near the model's
+    centre, at random normals at least 45 degrees apart: islands, and necks cut through.
+    ``speckle`` (MODEL+speckle:SEED:IT): 2-8 % of the faces removed at random: many small holes,
+    vertices where holes touch. 100 free points on the removed part with probability 1/2 (none
+    for speckle)."""
+    if style not in STYLES:
+        raise ValueError(f"unknown cut style {style!r}: one of {', '.join(STYLES)}")
     truth = _model(model)
     genus = MODELS[model][1]
     d = truth.bbox_diagonal()
-    rng = np.random.default_rng([seed, it, sum(map(ord, model))])
+    tag = model if style == "balls" else f"{model}+{style}"
+    rng = np.random.default_rng([seed, it, sum(map(ord, tag))])
     rm = np.zeros(truth.n_faces, dtype=bool)
-    for _ in range(rng.integers(1, 5)):
-        rm |= ball(truth, truth.vertices[rng.integers(truth.n_vertices)], rng.uniform(0.03, 0.09) * d)
-    if rng.random() < 0.5:
-        n = rng.normal(size=3)
-        p = truth.vertices[rng.integers(truth.n_vertices)]
-        rm |= slab(truth, n, float(p @ n / np.linalg.norm(n)), rng.uniform(0.015, 0.03) * d)
-    fp = 100 if rng.random() < 0.5 else 0
-    c = gen.cut(truth, rm, name=f"{model}:{seed}:{it}", description="random cut", free_points=fp, seed=seed)
+    fp = 0
+    if style == "balls":
+        for _ in range(rng.integers(1, 5)):
+            rm |= ball(truth, truth.vertices[rng.integers(truth.n_vertices)], rng.uniform(0.03, 0.09) * d)
+        if rng.random() < 0.5:
+            n = rng.normal(size=3)
+            p = truth.vertices[rng.integers(truth.n_vertices)]
+            rm |= slab(truth, n, float(p @ n / np.linalg.norm(n)), rng.uniform(0.015, 0.03) * d)
+        fp = 100 if rng.random() < 0.5 else 0
+    elif style == "cross":
+        centre = truth.vertices.mean(axis=0) + rng.normal(scale=0.03 * d, size=3)
+        n1 = rng.normal(size=3)
+        n2 = rng.normal(size=3)
+        while abs(n1 @ n2) > np.cos(np.radians(45)) * np.linalg.norm(n1) * np.linalg.norm(n2):
+            n2 = rng.normal(size=3)
+        for n in (n1, n2):
+            rm |= slab(truth, n, float(centre @ n / np.linalg.norm(n)), rng.uniform(0.015, 0.03) * d)
+        fp = 100 if rng.random() < 0.5 else 0
+    else:
+        rm = rng.random(truth.n_faces) < rng.uniform(0.02, 0.08)
+    c = gen.cut(truth, rm, name=f"{tag}:{seed}:{it}", description=f"random cut ({style})", free_points=fp, seed=seed)
     m = c.incomplete
     return BenchCase(c.name, np.asarray(m.vertices), np.asarray(m.faces), np.asarray(c.free_points), truth, genus,
                      c.description)
@@ -250,7 +278,7 @@ def markdown(rows: list[dict], command: str) -> str:
     by_cut: dict[str, dict[str, dict]] = {}
     for r in rows:
         by_cut.setdefault(r["case"], {})[r["method"]] = r
-    models = sorted({c.split(":")[0] for c in by_cut}, key=list(MODELS).index)
+    models = sorted({c.split(":")[0] for c in by_cut}, key=lambda m: (list(MODELS).index(m.partition("+")[0]), m))
     methods = [m for m in ("light", "full", "meshlib") if any(m in d for d in by_cut.values())]
     out = []
     for model in models:
@@ -277,7 +305,9 @@ def markdown(rows: list[dict], command: str) -> str:
         "## Repair on random cuts (`python -m bench.sweep`)", "",
         f"`{command}`: each model cut by 1-4 balls of faces (radius 3-9 % of the diagonal), half of the "
         "time also a slab (width 1.5-3 %), half of the time with 100 free points sampled on the removed "
-        "part; cuts named MODEL:SEED:IT (`--only` re-runs one). No bench case is among them and none was "
+        "part; cuts named MODEL:SEED:IT (`--only` re-runs one; with `--styles cross,speckle` also two "
+        "slabs crossing near the model's centre, MODEL+cross, and 2-8 % of the faces at random, "
+        "MODEL+speckle). No bench case is among them and none was "
         "looked at while the rules were made, except the ones the tests name (tests/test_repair_random_cuts.py, "
         "test_repair_sheets.py, test_repair_rims.py), the thin-plate cuts the sheet rule was made on "
         "(repair_field.through_sheet), the turned-part cuts the rim rules were traced on (darning/sheets.py, "
@@ -296,7 +326,8 @@ def markdown(rows: list[dict], command: str) -> str:
 def _command(a: argparse.Namespace) -> str:
     """The command that makes these rows (for the table's text)."""
     models = "" if a.models == ",".join(MODELS) else f" --models {a.models}"
-    return f"python -m bench.sweep --seeds {a.seeds} --per-seed {a.per_seed}{models} --write"
+    styles = "" if a.styles == "balls" else f" --styles {a.styles}"
+    return f"python -m bench.sweep --seeds {a.seeds} --per-seed {a.per_seed}{models}{styles} --write"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -306,7 +337,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--models", default=",".join(MODELS), help="comma-separated: " + ", ".join(MODELS))
     ap.add_argument("--modes", default="light,full", help="our modes ('' for the peers only)")
     ap.add_argument("--peers", default="meshlib", help="'meshlib' or '' (none)")
-    ap.add_argument("--only", help="these cuts only, MODEL:SEED:IT[,MODEL:SEED:IT...]")
+    ap.add_argument("--styles", default="balls", help="cut styles, comma-separated: " + ", ".join(STYLES))
+    ap.add_argument("--only", help="these cuts only, MODEL[+STYLE]:SEED:IT[,...]")
     ap.add_argument("--save", help="write each cut as DIR/MODEL_SEED_IT.npz")
     ap.add_argument("--samples", type=int, default=4000)
     ap.add_argument("--timeout", type=float, default=300.0)
@@ -330,9 +362,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"sweep: {DATA} not found (the shared models)", file=sys.stderr)
         return 2
     if a.only:
-        todo = [(m, int(s), int(i)) for m, s, i in (c.split(":") for c in a.only.split(","))]
+        todo = [(m.partition("+")[0], int(s), int(i), m.partition("+")[2] or "balls")
+                for m, s, i in (c.split(":") for c in a.only.split(","))]
     else:
-        todo = [(m, s, i) for s in _seeds(a.seeds) for m in a.models.split(",") for i in range(a.per_seed)]
+        todo = [(m, s, i, style) for style in a.styles.split(",") for s in _seeds(a.seeds)
+                for m in a.models.split(",") for i in range(a.per_seed)]
     methods = {f"ours-{mode}": (lambda V, F, P, mode=mode: ours_repair(V, F, P, mode))
                for mode in a.modes.split(",") if mode}  # --modes '': the peers only
     if a.peers == "meshlib":
@@ -342,11 +376,11 @@ def main(argv: list[str] | None = None) -> int:
     bench_repair.REPEAT_BELOW = 0.0  # one run per tool: a sweep measures outcomes, bench/repair.py times
     out = open(a.out, "a") if a.out else None
     rows: list[dict] = []
-    for model, seed, it in todo:
-        case = make_cut(model, seed, it)
+    for model, seed, it, style in todo:
+        case = make_cut(model, seed, it, style)
         if a.save:
             Path(a.save).mkdir(parents=True, exist_ok=True)
-            np.savez(Path(a.save) / f"{model}_{seed}_{it}.npz", vertices=case.vertices, faces=case.faces,
+            np.savez(Path(a.save) / f"{case.name.replace(':', '_')}.npz", vertices=case.vertices, faces=case.faces,
                      free_points=case.free_points, truth_vertices=case.truth.vertices, truth_faces=case.truth.faces,
                      genus=case.genus)
         for label, fn in methods.items():
