@@ -216,6 +216,13 @@ def make_cut(model: str, seed: int, it: int, style: str = "balls") -> BenchCase:
                      c.description)
 
 
+def cut_named(name: str) -> BenchCase:
+    """The cut a name stands for: MODEL:SEED:IT (balls) or MODEL+STYLE:SEED:IT (``make_cut``)."""
+    tag, seed, it = name.split(":")
+    model, _, style = tag.partition("+")
+    return make_cut(model, int(seed), int(it), style or "balls")
+
+
 @functools.cache
 def _model(name: str) -> Mesh:
     return MODELS[name][0]()
@@ -362,11 +369,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"sweep: {DATA} not found (the shared models)", file=sys.stderr)
         return 2
     if a.only:
-        todo = [(m.partition("+")[0], int(s), int(i), m.partition("+")[2] or "balls")
-                for m, s, i in (c.split(":") for c in a.only.split(","))]
+        todo = a.only.split(",")
     else:
-        todo = [(m, s, i, style) for style in a.styles.split(",") for s in _seeds(a.seeds)
-                for m in a.models.split(",") for i in range(a.per_seed)]
+        todo = [f"{m if style == 'balls' else f'{m}+{style}'}:{s}:{i}" for style in a.styles.split(",")
+                for s in _seeds(a.seeds) for m in a.models.split(",") for i in range(a.per_seed)]
     methods = {f"ours-{mode}": (lambda V, F, P, mode=mode: ours_repair(V, F, P, mode))
                for mode in a.modes.split(",") if mode}  # --modes '': the peers only
     if a.peers == "meshlib":
@@ -376,8 +382,8 @@ def main(argv: list[str] | None = None) -> int:
     bench_repair.REPEAT_BELOW = 0.0  # one run per tool: a sweep measures outcomes, bench/repair.py times
     out = open(a.out, "a") if a.out else None
     rows: list[dict] = []
-    for model, seed, it, style in todo:
-        case = make_cut(model, seed, it, style)
+    for name in todo:
+        case = cut_named(name)
         if a.save:
             Path(a.save).mkdir(parents=True, exist_ok=True)
             np.savez(Path(a.save) / f"{case.name.replace(':', '_')}.npz", vertices=case.vertices, faces=case.faces,

@@ -124,10 +124,9 @@ def _repair_hausdorff(name: str) -> float:
     from algorithms.metrics import distances
     from algorithms.normalize import normalize
     from algorithms.repair import RepairParams, repair
-    from bench.sweep import make_cut
+    from bench.sweep import cut_named
 
-    model_name, seed, i = name.split(":")
-    case = make_cut(model_name, int(seed), int(i))
+    case = cut_named(name)
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
     out = repair(model, RepairParams()).mesh
     assert_input_kept(model, out)

@@ -31,10 +31,9 @@ def ring_of(F: np.ndarray, v: int) -> list[int]:
 
 def sweep_repair(name: str, mode: str = "light"):
     """The repair of the random cut MODEL:SEED:IT of bench/sweep.py."""
-    from bench.sweep import make_cut
+    from bench.sweep import cut_named
 
-    model, seed, it = name.split(":")
-    case = make_cut(model, int(seed), int(it))
+    case = cut_named(name)
     return repair(normalize(case.vertices, case.faces, extra_points=case.free_points),
                   RepairParams(field=FieldParams(mode=mode)))
 
