@@ -415,9 +415,16 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         # ball's hole to the far side of the slab, median 0.017 beside the band's 0.104)
         handle_pairs = {key for key, qs in by_pair.items()
                         if len(qs) >= 3 and med[key] >= 0.5 * max(best[key[0]], best[key[1]])}
+        # where each loop's lines reach other loops: (position, other loop), for _second_band
+        contacts: dict[int, list[tuple[int, int]]] = {}
+        for b, _ in cands:
+            (ka, ia), (kb, ib) = loop_of[b.start], loop_of[b.end]
+            contacts.setdefault(ka, []).append((ia, kb))
+            contacts.setdefault(kb, []).append((ib, ka))
         cands.sort(key=lambda c: (-support[tuple(sorted((loop_of[c[0].start][0], loop_of[c[0].end][0])))],
                                   -c[0].quality))
-        joined: set[tuple[int, int]] = set()  # loop pairs a kept island bridge joins
+        # loop pairs a kept island bridge joins: the positions of its ends on the two loops
+        joined: dict[tuple[int, int], list[tuple[int, int]]] = {}
         # the facing rims of a tube cut across into two islands, across a gap longer than the tube
         # is wide: bridges along the tube, as between the rims of one island (step 2, _rim_bridges)
         island_rims = {(a, b) for a, b in rf.facing_rims(frames, list(range(len(frames))), same_island=False)
@@ -428,7 +435,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
                 if state.conflict(br, neighbourhood=0.0, near_ends=False) is None:
                     keep(br, None, hold=True)
                     guard.add(br)
-                    joined.add((a, b))
+                    joined.setdefault((a, b), []).append(_ends(br, loop_of))
             notes.append(f"loops {a} and {b}: facing rims of a tube across islands, "
                          f"{'joined along it' if (a, b) in joined else 'no bridge along it fits'}")
         for b, ln in cands:
@@ -445,14 +452,19 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
             if why is None and guard.effect(b.start, b.end) == "handle":
                 if pair not in handle_pairs:
                     why = "would join two holes of one surface (a handle the tunnel rule does not support)"
-                elif pair in joined:  # a handle is a second band (a torus in pieces), never a line across
-                    # the bridges of the same two loops in crossed order (bunny cut by a slab and balls:
-                    # a small island in the band came back with a handle)
+                elif pair in joined and _crossed_order(joined[pair], _ends(b, loop_of)):
+                    # a handle is a second band (a torus in pieces), never a line across the bridges
+                    # of the same two loops in crossed order (bunny cut by a slab and balls: a small
+                    # island in the band came back with a handle)
                     why = "would join two holes of one surface across the bridges of the same loops (crossed order)"
+                elif pair in joined and not _second_band(joined[pair], _ends(b, loop_of), contacts, pair,
+                                                         [len(loops[k]) for k in pair]):
+                    why = ("would join two holes of one surface beside the bridges of the same loops "
+                           "(no other island's line between: not a second band)")
             if why is None:
                 keep(b, ln)
                 guard.add(b)
-                joined.add(pair)  # type: ignore[arg-type]
+                joined.setdefault(pair, []).append(_ends(b, loop_of))  # type: ignore[arg-type]
             else:
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
@@ -1139,6 +1151,59 @@ def _past_a_pinch(pair: tuple[int, int], group: dict[int, int]) -> bool:
     joined at 5 pinches and by 8 lines): kept."""
     a, b = pair
     return (a in group or b in group) and group.get(a, -1 - a) != group.get(b, -1 - b)
+
+
+def _ends(b: Bridge, loop_of: dict[int, tuple[int, int]]) -> tuple[int, int]:
+    """The positions of a bridge's ends on its two loops, the loop of smaller index first."""
+    (ka, ia), (kb, ib) = loop_of[b.start], loop_of[b.end]
+    return (ia, ib) if ka <= kb else (ib, ia)
+
+
+def _crossed_order(kept: list[tuple[int, int]], new: tuple[int, int]) -> bool:
+    """Whether the bridges between two loops, ``kept`` and ``new`` (their ends' positions on loop A
+    and on loop B, ``_ends``), meet the loops in crossed order.
+
+    The loops run with their faces on one side, so two loops facing each other across a band run
+    opposite ways: bridges across the band meet A in one cyclic order and B in the reverse. A bridge
+    that breaks that order runs from between two bridges on one loop to outside them on the other:
+    it joins two holes of the band with a twist (bunny cut by a slab and balls: a handle the bunny
+    does not have). A bridge in order may be a second band between the same loops (a torus cut into
+    four pieces by two crossing slabs: the handle is the second band of two of them; ``_second_band``
+    says when it is). Bridges from one vertex are put in the order that keeps them consistent."""
+    ends = [*kept, new]
+    on_a = sorted(range(len(ends)), key=lambda k: (ends[k][0], -ends[k][1]))
+    on_b = sorted(range(len(ends)), key=lambda k: (-ends[k][1], ends[k][0]))
+    r = on_b.index(on_a[0])
+    return on_a != on_b[r:] + on_b[:r]
+
+
+def _second_band(kept: list[tuple[int, int]], new: tuple[int, int], contacts: dict[int, list[tuple[int, int]]],
+                 pair: tuple[int, int], sizes: list[int]) -> bool:
+    """Whether a bridge between loops A and B (``pair``; ``new``, ``kept``: its ends' and the kept
+    A-B bridges' positions, ``_ends``) is a second band between them: on each loop, both stretches
+    from its end to the nearest kept A-B end on either side hold an end of a line to another loop
+    (``contacts``: position and other loop of every arrived island line's ends).
+
+    A torus cut into four pieces by two crossing slabs: each piece meets two others across two
+    bands, and the handle is the second band of a pair, with the other piece's band between the two
+    on both loops (frep-torus cross 2:0: genus 0 with the second band refused, 10 % of the diagonal
+    off). A line beside a band's bridges in their order, with no other loop between, is the same
+    band: the thin torus crossed by two slabs at a shallow angle (thin-torus cross 1:0) made three
+    handles of such lines from a sliver of tube between the slabs."""
+    for side, k in enumerate(pair):
+        n = sizes[side]
+        p = new[side]
+        ks = np.array([e[side] for e in kept])
+        fwd, bwd = ((ks - p) % n).min(), ((p - ks) % n).min()
+        if fwd == 0 or bwd == 0:
+            return False
+        other = np.array([q for q, o in contacts.get(k, []) if o != pair[1 - side]], dtype=np.int64)
+        if not len(other):
+            return False
+        f, r = (other - p) % n, (p - other) % n
+        if not (((f > 0) & (f < fwd)).any() and ((r > 0) & (r < bwd)).any()):
+            return False
+    return True
 
 
 def _shared_vertex_joins(copies: dict[int, list[int]], guard: TopologyGuard,
