@@ -376,7 +376,9 @@ def test_a_region_the_global_fairing_throws_off_takes_a_fallback(monkeypatch):
     Since the fairing reads only the sheets its patches continue (darning/sheets.py), U3 keeps that
     region near its hole; with every face read, as before, the fallback is still what does (with the
     patches along rims the border follows pinned, repair.RIM_PIN, the region is not faired
-    globally at all: off for this check)."""
+    globally at all: off for this check). Checked on the first run, which has that region: the run
+    kept joins the islands touching at points first (repair._repair, step 0) and its regions
+    differ."""
     import algorithms.darning.sheets as sheets
     import algorithms.repair as rp
     from algorithms.metrics import point_to_surface
@@ -391,7 +393,7 @@ def test_a_region_the_global_fairing_throws_off_takes_a_fallback(monkeypatch):
             monkeypatch.setattr(sheets, "along_crease", lambda v, f, *a, **k: np.zeros(len(f), dtype=bool))
             monkeypatch.setattr(sheets, "reached_sheets", lambda v, f, *a, **k: np.ones(len(f), dtype=bool))
             monkeypatch.setattr(rp, "RIM_PIN", False)
-        res = repair(model, RepairParams(field=FieldParams(mode="light")))
+        res = rp._repair(model, RepairParams(field=FieldParams(mode="light")))
         assert_input_kept(model, res.mesh, fragments=True)
         off = point_to_surface(res.mesh.vertices, part.vertices, part.faces).max() / part.bbox_diagonal()
         assert off < 0.05  # 0.45 judged over every new vertex at once
@@ -574,10 +576,11 @@ def test_fragments_standing_on_a_rim_join_the_gap_they_stand_in():
     ends of an earlier one, an edge of four faces (repair._is_edge over the bare bridges). Now closed
     and manifold in both modes, every input face kept. The islands also touch at 38 vertices whose
     copies the joins through the patches left apart (not closed once merged by position, as the
-    scorer loads it); the run with those pinches joined leaves none: genus 1 in full mode, as the
-    truth, and 2 in light mode (genus 1 as written with the copies apart). That is the second run
-    (the pinches between different holes): it leaves no copy, so no third is made (joined in the
-    second run as well, the pinches on one hole moved the patches: Hausdorff 0.22 -> 1.31 %)."""
+    scorer loads it); the run with those pinches joined leaves none: genus 1 in both modes, as the
+    truth (light mode had genus 2 while the pinches between islands were joined after the island
+    bridges: repair._repair, step 0). That is the second run (the pinches between different holes):
+    it leaves no copy, so no third is made (joined in the second run as well, the pinches on one
+    hole moved the patches: Hausdorff 0.22 -> 1.31 %)."""
     model = annulus_cut([(2204, 0.18643152622075815), (4485, 0.1367235661212496), (4670, 0.139358759821132),
                          (5651, 0.295550981874801)],
                         ([1.0024269805867294, 0.7146943411145676, -0.5935466183426229], -0.3862205516363897,
@@ -585,7 +588,7 @@ def test_fragments_standing_on_a_rim_join_the_gap_they_stand_in():
     assert sum(s.reason.startswith("fragment") for s in model.set_aside) == 20
     from bench.repair import merge_positions
 
-    for mode, genus in (("light", 2), ("full", 1)):
+    for mode, genus in (("light", 1), ("full", 1)):
         res = repair(model, RepairParams(field=FieldParams(mode=mode)))
         assert_closed_manifold(res, genus=genus)
         assert topology(res.mesh.faces).manifold_vertices
@@ -700,16 +703,26 @@ def test_fragments_touching_at_a_free_vertex_leave_no_pinch():
     """bench/sweep.py cut featuretype:11:0, light mode: three fragments set aside (one hangs at each of
     three border vertices) touch one another at a vertex no other face has. Put back, that vertex
     had two fans of faces: closed, but not a manifold (Euler -17, "genus 9.5"). Each fan gets its
-    own vertex now (a copy at the same position), and the repair says so."""
+    own vertex now (a copy at the same position), and the repair says so: in the first run, which
+    leaves 3 copies of other points apart. The run kept joins the islands touching at a point before
+    their bridges (repair._repair, step 0) and leaves none: closed, genus 9 and manifold as the
+    scorer loads it too (before step 0: genus 9 with the 3 copies apart)."""
+    import algorithms.repair as rp
+    from bench.repair import merge_positions
     from bench.sweep import make_cut
 
     case = make_cut("featuretype", 11, 0)
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
     assert sum(s.reason.startswith("fragment") for s in model.set_aside) == 22
+    first = rp._repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert "1 vertices where the surface met itself at a point split into copies" in first.tunnel_note
+    assert topology(first.mesh.faces).manifold_vertices
+    assert_input_kept(model, first.mesh, fragments=True)
     res = closed_repair(model, genus=9)
-    assert "1 vertices where the surface met itself at a point split into copies" in res.tunnel_note
-    assert topology(res.mesh.faces).manifold_vertices
+    assert res.copies_left == 0 and topology(res.mesh.faces).manifold_vertices
     assert_input_kept(model, res.mesh, fragments=True)
+    merged = topology(merge_positions(np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces), 1e-9)[1])
+    assert merged.watertight and merged.manifold_vertices and merged.genus == 9
 
 
 def test_two_lines_one_way_between_holes_far_apart_make_no_handle(monkeypatch):
