@@ -388,11 +388,14 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
     #    count those islands joined there.
     #    **(choice)** Joined after the bridges (as the copies on one island still are), a pinch
     #    between two islands a band's bridges had joined too was a handle the surface does not
-    #    have. Joined first, 6 runs of 5 sweep cuts come out right (frep-cross cross 1:0 both modes,
-    #    genus 1 -> 0; torus-thick cross 1:0, box cross 2:0, annulus 4:0 light; featuretype 11:0
-    #    full) and none wrong, of the 65 pinch runs of seeds 1-14 and the cross and speckle cuts of
-    #    seeds 1-2. Between loops of one island as well, it made featuretype 4:1 full 3.2 -> 8.2 %
-    #    (its tunnels ran into the joins): those stay after the bridges.
+    #    have. Joined first, and counted in ``joined`` (a second band beside a pinch is then judged
+    #    as beside a bridge), 7 runs of 5 sweep cuts come out right (frep-cross cross 1:0 both
+    #    modes, genus 1 -> 0; featuretype 11:0 both; torus-thick cross 1:0, box cross 2:0, annulus
+    #    4:0 light) and none wrong, of the 65 pinch runs of seeds 1-14 and of the cross and speckle
+    #    cuts of seeds 1-2. Between loops of one island as well, it made featuretype 4:1 full 3.2 ->
+    #    8.2 % (its tunnels ran into the joins): those stay after the bridges, and the tunnel rule's
+    #    pinch groups (``_past_a_pinch``, a handle the input has) leave the joins between islands
+    #    out (with them a featuretype slab lost a tunnel: genus 8, truth 9).
     early = [b for b in _pinch_joins(walk_holes(loops, [], []), copies, [])
              if guard.island_of[b.start] != guard.island_of[b.end]] if join_pinches else []
     # loop pairs a kept island bridge (or such a join) joins: the positions of its ends on the two loops
