@@ -45,18 +45,25 @@ def test_second_band_needs_another_islands_lines_between_on_both_loops():
     assert not _second_band(kept, (40, 5), lone, (0, 1), sizes)
 
 
+def _torus_in_four(turn: float, tilt: float):
+    """(truth, model, light-mode repair) of a torus cut by a band round it (normal (tilt, 0, 1),
+    offset 0.02, 0.1 wide) and a band through its axis (0.18 wide, turned ``turn`` degrees about z)."""
+    truth = torus(1.0, 0.35, 64, 24)
+    c = face_centroids(truth)
+    a = np.radians(turn)
+    n = np.array([tilt, 0.0, 1.0]) / np.hypot(tilt, 1.0)
+    remove = (np.abs(c @ n - 0.02) < 0.05) | (np.abs(c @ [np.cos(a), np.sin(a), 0.0]) < 0.09)
+    case = cut(truth, remove, name="torus in four", description="")
+    model = normalize(case.incomplete.vertices, case.incomplete.faces)
+    return truth, model, repair(model, RepairParams(field=FieldParams(mode="light")))
+
+
 @pytest.mark.parametrize("turn", [0.0, 20.0, 40.0])
 def test_torus_in_four_pieces_comes_back_a_torus(turn):
     """A band round the torus (z = 0.02, 0.1 wide) and a band through its axis (0.18 wide, turned
     about z): four islands. Genus 0 on the old rule, 2.1-2.3 % of the diagonal off; measured now
     genus 1 and 0.03-0.08 %."""
-    truth = torus(1.0, 0.35, 64, 24)
-    c = face_centroids(truth)
-    a = np.radians(turn)
-    remove = (np.abs(c[:, 2] - 0.02) < 0.05) | (np.abs(c @ [np.cos(a), np.sin(a), 0.0]) < 0.09)
-    case = cut(truth, remove, name="torus in four", description="")
-    model = normalize(case.incomplete.vertices, case.incomplete.faces)
-    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    truth, model, res = _torus_in_four(turn, tilt=0.0)
     assert res.class_found == "ICM3"
     t = topology(res.mesh.faces)
     assert t.watertight and t.components == 1 and t.genus == 1
@@ -72,14 +79,7 @@ def test_torus_in_four_pieces_with_no_line_across_one_cut(turn):
     none. The island bridges join the two halves of the tube into two tubes joined at one end; the
     other end's walks are the facing rims of a tube cut across, joined along it
     (repair._facing_walk_bridges). Genus 0 and 2.2 % of the diagonal off before; 0.08-0.10 % now."""
-    truth = torus(1.0, 0.35, 64, 24)
-    c = face_centroids(truth)
-    a = np.radians(turn)
-    n = np.array([0.1, 0.0, 1.0]) / np.hypot(0.1, 1.0)
-    remove = (np.abs(c @ n - 0.02) < 0.05) | (np.abs(c @ [np.cos(a), np.sin(a), 0.0]) < 0.09)
-    case = cut(truth, remove, name="torus in four", description="")
-    model = normalize(case.incomplete.vertices, case.incomplete.faces)
-    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    truth, model, res = _torus_in_four(turn, tilt=0.1)
     t = topology(res.mesh.faces)
     assert t.watertight and t.components == 1 and t.genus == 1
     assert any("facing rims of a tube the island bridges left apart" in n for n in res.tunnel_note.split("; "))
