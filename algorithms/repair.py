@@ -452,9 +452,10 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         island_rims = {(a, b) for a, b in rf.facing_rims(frames, list(range(len(frames))), same_island=False)
                        if _long_gap(frames[a], frames[b])}
         for a, b in sorted(island_rims):
-            for br in _rim_bridges(work.V(), frames[a], frames[b], lc_used, params.field.ki, spacing, boundary,
-                                   rules.along, kind="island"):
-                if state.conflict(br, neighbourhood=0.0, near_ends=False) is None:
+            for k, br in enumerate(_rim_bridges(work.V(), frames[a], frames[b], lc_used, params.field.ki, spacing,
+                                                boundary, rules.along, kind="island")):
+                if state.conflict(br, neighbourhood=0.0, near_ends=False) is None and \
+                        (k == 0 or not RIM_ONE_HANDLE or guard.effect(br.start, br.end) != "handle"):
                     keep(br, None, hold=True)
                     guard.add(br)
                     joined.setdefault((a, b), []).append(_ends(br, loop_of))
@@ -1399,7 +1400,13 @@ def _rim_bridges(V: NDArray[np.float64], fa, fb, lc: float, ki: float, spacing: 
     return out
 
 
-FACING_WALKS = True
+FACING_WALKS = True  # _facing_walk_bridges on (a switch for measuring the rule against the code without it)
+# **(choice)** of the bridges along a tube between two facing rims of islands (step 1), only the
+# first may join two holes of one surface: across an empty gap the next ones split the hole the first
+# made. One that would make a handle runs across something in the gap: a sliver of the thin torus
+# crossed by two slabs (sweep cut thin-torus+cross:1:0), pinched to one rim on both sides of the
+# tube, lay there, and a second bridge across it gave genus 2 (truth 1).
+RIM_ONE_HANDLE = True
 
 
 def _facing_walk_bridges(work: _Work, loops: list[NDArray[np.int64]], bridges: list[Bridge],

@@ -19,6 +19,10 @@ from bench.repair import merge_positions
     ("frep-cross+cross:1:0", 0),  # before: genus 1 as written
     ("torus-thick+cross:1:0", 1),  # before: 2 copies apart, not closed once merged by position
     ("box+cross:2:0", 0),  # before: 2 copies apart
+    # before: genus 2 (4 before the second-band test): a sliver of tube pinched to one rim on both
+    # sides of the tube lay in the gap between two facing rims, and a second bridge along the tube
+    # ran across it (repair.RIM_ONE_HANDLE)
+    ("thin-torus+cross:1:0", 1),
 ])
 def test_islands_touching_at_a_vertex_are_joined_there_first(name, genus):
     from bench.sweep import cut_named
