@@ -383,6 +383,19 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         if hold:
             held_chains.append(chains[-1])
 
+    def keep_along_tube(brs: list[Bridge]) -> list[Bridge]:
+        """Keep the bridges along a tube between two facing rims (``_rim_bridges``) that fit the
+        kept ones, held by the fairing; only the first may join two holes of one surface
+        (``RIM_ONE_HANDLE``). Returns those kept."""
+        kept = []
+        for k, br in enumerate(brs):
+            if state.conflict(br, neighbourhood=0.0, near_ends=False) is None and (
+                    k == 0 or not RIM_ONE_HANDLE or guard.effect(br.start, br.end) != "handle"):
+                keep(br, None, hold=True)
+                guard.add(br)
+                kept.append(br)
+        return kept
+
     # 0. pinch runs: where two islands touch (copies of one input vertex on loops of two islands),
     #    the copies are joined before any island bridge, so the topology guard and the tunnel rule
     #    count those islands joined there.
@@ -452,15 +465,12 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         island_rims = {(a, b) for a, b in rf.facing_rims(frames, list(range(len(frames))), same_island=False)
                        if _long_gap(frames[a], frames[b])}
         for a, b in sorted(island_rims):
-            for k, br in enumerate(_rim_bridges(work.V(), frames[a], frames[b], lc_used, params.field.ki, spacing,
-                                                boundary, rules.along, kind="island")):
-                if state.conflict(br, neighbourhood=0.0, near_ends=False) is None and \
-                        (k == 0 or not RIM_ONE_HANDLE or guard.effect(br.start, br.end) != "handle"):
-                    keep(br, None, hold=True)
-                    guard.add(br)
-                    joined.setdefault((a, b), []).append(_ends(br, loop_of))
+            along_it = keep_along_tube(_rim_bridges(work.V(), frames[a], frames[b], lc_used, params.field.ki,
+                                                    spacing, boundary, rules.along, kind="island"))
+            if along_it:
+                joined.setdefault((a, b), []).extend(_ends(br, loop_of) for br in along_it)
             notes.append(f"loops {a} and {b}: facing rims of a tube across islands, "
-                         f"{'joined along it' if (a, b) in joined else 'no bridge along it fits'}")
+                         f"{'joined along it' if along_it else 'no bridge along it fits'}")
         for b, ln in cands:
             n_arrived += 1
             pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
@@ -520,13 +530,11 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         # walks of the joined islands that are the facing rims of a tube the island bridges did
         # not join: joined along it, as facing rims of islands
         if params.tunnels != "off" and FACING_WALKS:
-            for b in _facing_walk_bridges(work, loops, bridges, chains, loop_of, guard, lc_used, params.field.ki,
-                                          spacing, boundary, rules.along):
-                if state.conflict(b, neighbourhood=0.0, near_ends=False) is None:
-                    keep(b, None, hold=True)
-                    guard.add(b)
-                    notes.append(f"walks at vertices {b.start} and {b.end}: facing rims of a tube the island "
-                                 "bridges left apart, joined along it")
+            for brs in _facing_walk_bridges(work, loops, bridges, chains, loop_of, guard, lc_used,
+                                            params.field.ki, spacing, boundary, rules.along):
+                if along_it := keep_along_tube(brs):
+                    notes.append(f"walks at vertices {along_it[0].start} and {along_it[0].end}: facing rims of a "
+                                 "tube the island bridges left apart, joined along it")
     timings["bridges"] = time.perf_counter() - t0
 
     # 2. tunnels: among all non-trivial boundaries (spec §6 step 2: the loops of islands with two
@@ -1401,8 +1409,8 @@ def _rim_bridges(V: NDArray[np.float64], fa, fb, lc: float, ki: float, spacing: 
 
 
 FACING_WALKS = True  # _facing_walk_bridges on (a switch for measuring the rule against the code without it)
-# **(choice)** of the bridges along a tube between two facing rims of islands (step 1), only the
-# first may join two holes of one surface: across an empty gap the next ones split the hole the first
+# **(choice)** of the bridges along a tube between two facing rims of islands, or facing walks
+# (step 1), only the first may join two holes of one surface: across an empty gap the next ones split the hole the first
 # made. One that would make a handle runs across something in the gap: a sliver of the thin torus
 # crossed by two slabs (sweep cut thin-torus+cross:1:0), pinched to one rim on both sides of the
 # tube, lay there, and a second bridge across it gave genus 2 (truth 1).
@@ -1412,12 +1420,12 @@ RIM_ONE_HANDLE = True
 def _facing_walk_bridges(work: _Work, loops: list[NDArray[np.int64]], bridges: list[Bridge],
                          chains: list[NDArray[np.int64]], loop_of: dict[int, tuple[int, int]], guard: TopologyGuard,
                          lc: float, ki: float, spacing: float, boundary: BoundaryEdges | None, along: float
-                         ) -> list[Bridge]:
+                         ) -> list[list[Bridge]]:
     """Bridges along a tube between two walks of the holes after the island bridges (spec §6
     step 1's walking rule) that are the facing rims of a tube cut across (``facing_rims``), each
     walk through at least one bridge and both in one piece (``guard``'s components: pieces left
     apart stay apart): the island bridges joined the pieces on each side of the cut into a rim but
-    nothing across it. Ends on input loop vertices only.
+    nothing across it. Ends on input loop vertices only; the bridges of each pair of walks in a list.
 
     **(choice)**, beyond the spec's step 2, which looks for lost handles among the loops of one
     island: the walks after step 1 are the boundaries of one island too. A torus cut into four by
@@ -1435,7 +1443,7 @@ def _facing_walk_bridges(work: _Work, loops: list[NDArray[np.int64]], bridges: l
     piece = [guard.find(guard.island_of[next(int(v) for v in h.polygon if int(v) in loop_of)]) for h in walks]
     frames = [frame_of(V[list(h.polygon)], N[list(h.polygon)], np.array(h.polygon, dtype=np.int64), island=p)
               for h, p in zip(walks, piece)]
-    out: list[Bridge] = []
+    out: list[list[Bridge]] = []
     for a, b in sorted(rf.facing_rims(frames, list(range(len(frames))))):
         sub = []
         for fr in (frames[a], frames[b]):
@@ -1444,7 +1452,7 @@ def _facing_walk_bridges(work: _Work, loops: list[NDArray[np.int64]], bridges: l
                                normal=fr.normal[on], outward=fr.outward[on], charge=fr.charge[on]))
         if min(len(f.vertices) for f in sub) < 4:
             continue
-        out += _rim_bridges(V, sub[0], sub[1], lc, ki, spacing, boundary, along, kind="island")
+        out.append(_rim_bridges(V, sub[0], sub[1], lc, ki, spacing, boundary, along, kind="island"))
     return out
 
 

@@ -38,3 +38,16 @@ def test_islands_touching_at_a_vertex_are_joined_there_first(name, genus):
         t = topology(faces)
         assert t.watertight and t.components == 1 and t.genus == genus
     assert_input_kept(model, res.mesh)
+
+
+def test_a_second_bridge_along_a_tube_makes_no_handle(monkeypatch):
+    """thin-torus+cross:1:0 (above) owes its genus to repair.RIM_ONE_HANDLE as well: with every
+    bridge along the tube between the facing rims kept, the one across the sliver lying in the gap
+    makes a handle (genus 2)."""
+    import algorithms.repair as rp
+    from bench.sweep import cut_named
+
+    monkeypatch.setattr(rp, "RIM_ONE_HANDLE", False)
+    case = cut_named("thin-torus+cross:1:0")
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    assert topology(repair(model, RepairParams(field=FieldParams(mode="light"))).mesh.faces).genus == 2
