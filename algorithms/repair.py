@@ -959,6 +959,11 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
                                      skip=np.concatenate([t[1] for t in tips]) if tips else None)
             if len(clamped):
                 timings_note["fairing"] += f" + {len(clamped)} vertices back inside convex surroundings"
+                # moved off where their side's fairing left them (a pinned patch beside a crease): the
+                # angle refinement may move or collapse them. Pressed onto the line where two face
+                # planes meet (a fill round the foot of the mushroom's stem, sweep cut 7:0), they made
+                # faces of no area it could not touch: 20 patch faces below 1 degree
+                movable = np.union1d(movable, np.setdiff1d(clamped, crease_v))
         # then Delaunay refinement for the angles (darning.refine_angles: flips first, points only
         # where a triangle stays below the angle bound and is not forced by the border)
         if beside and len(crease_v):  # chains _fair_sides moved off their force lines: the angle moves may too

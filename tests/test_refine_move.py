@@ -126,3 +126,32 @@ def test_a_vertex_of_a_fixed_face_never_moves_whatever_movable_says():
     assert np.array_equal(q.vertices[border], p[border])
     inner = np.setdiff1d(np.arange(n, len(p)), border)
     assert np.any(q.vertices[inner] != p[inner])  # the patch's vertices did move
+
+
+def _cap_square():
+    """A square patch (corners 0-3, border edges held by fixed faces outside) with three free vertices
+    on one line across its middle, x (4), z (5) and y (6), z between the others: the face (x, z, y)
+    has no area (a cap, 180 degrees at z), as where the convex clamp pressed a fill's vertices onto
+    the line where two face planes meet (darning/convex.py)."""
+    p = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0], [0.5, 1, 0], [1, 1, 0], [1.5, 1, 0],
+                  [1, -1, 0], [3, 1, 0], [1, 3, 0], [-1, 1, 0]], dtype=float)
+    A, B, C, D, x, z, y = range(7)
+    patch = np.array([[A, B, z], [z, x, A], [y, z, B], [x, z, y], [x, y, C], [x, C, D], [A, x, D], [B, C, y]])
+    fixed = np.array([[B, A, 7], [C, B, 8], [D, C, 9], [A, D, 10]])
+    free = np.zeros(len(p), dtype=bool)
+    free[[x, z, y]] = True
+    return p, patch, fixed, free
+
+
+def test_collapse_bad_removes_a_cap_of_no_area():
+    """A face of no area (three vertices on one line) goes with a collapse of one of its vertices,
+    and nothing folds."""
+    p, patch, fixed, free = _cap_square()
+    ang = np.degrees(R.corner_angles(p, patch).min(axis=1))
+    assert ang[3] < 1e-6 and (np.delete(ang, 3) > 18).all()
+    f, done = R._collapse_bad(p, patch, fixed, None, free, np.array([3]))
+    assert done >= 1 and len(f) < len(patch)  # collapses (here x and y both onto z: four faces of 45 deg)
+    assert np.degrees(R.corner_angles(p, f).min()) > 18
+    t = p[f]
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    assert (n[:, 2] > 0).all()  # nothing folded

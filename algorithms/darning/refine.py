@@ -822,6 +822,9 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     return acc[:n_acc].copy(), np.vstack(faces + grow)
 
 
+FLAT = np.radians(1.0)  # _collapse_bad: a face with an angle below this has (almost) no area
+
+
 def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
                   locked: NDArray[np.int64] | None, free: NDArray[np.bool_], bad: NDArray[np.int64],
                   below: float | None = None) -> tuple[NDArray[np.int64], int]:
@@ -861,6 +864,10 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
         star_ang = corner_angles(p, star).min(axis=1)
         before = star_ang.min()
         n_below = int((star_ang < below).sum()) if below is not None else 0
+        # a face of no area has no side to fold to: judged against the star's normal instead
+        flat = star_ang < FLAT
+        n_old[flat] = n_old.sum(axis=0)
+        n_flat = int(flat.sum())
         ring = set(np.unique(star).tolist()) - {int(c)}
         best = None
         for u in ring:
@@ -877,13 +884,18 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
             nf[nf == c] = u
             t2 = p[nf]
             n_new = _cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
-            if (np.einsum("ij,ij->i", n_new, n_old[~both]) <= 0).any():
-                continue  # a fold
             new_ang = corner_angles(p, nf).min(axis=1)
+            ref = n_old[~both]
+            judged = new_ang >= FLAT if n_flat else np.ones(len(nf), dtype=bool)  # no area: no side
+            if (np.einsum("ij,ij->i", n_new[judged], ref[judged]) <= 0).any():
+                continue  # a fold
             m = new_ang.min()
             if below is not None and (new_ang < below).sum() > n_below:
                 continue
-            if m > before and (best is None or m > best[0]):
+            # better: a larger smallest angle, or as large and fewer faces of no area (collinear
+            # corners pressed onto one line: no single collapse lifts every one of them)
+            fewer = n_flat > 0 and m >= before and int((new_ang < FLAT).sum()) < n_flat
+            if (m > before or fewer) and (best is None or m > best[0]):
                 best = (m, both, nf)
         if best is None:
             # no collapse keeps the link condition and helps (e.g. c and its nearest neighbour
