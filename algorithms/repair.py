@@ -1011,24 +1011,21 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
                         joins.left, pinch_pairs, pinch_pairs_all)
 
 
-FLAT_FACE = 1.0  # _in_flat_faces: a face with an angle below this many degrees has (almost) no area
-
-
 def _in_flat_faces(V: NDArray[np.float64], F: NDArray[np.int64], ids: NDArray[np.int64]) -> NDArray[np.int64]:
-    """The vertices of ``ids`` that are a corner of a face of ``F`` with an angle below ``FLAT_FACE``
-    degrees (a cap over an edge, or a needle at a vertex).
+    """The vertices of ``ids`` that are a corner of a face of ``F`` of no area (an angle below
+    darning.refine.FLAT: a cap over an edge, or a needle at a vertex).
 
     **(choice)** The vertices of a patch beside a crease are faired on their side and kept still
     after it, by the global fairing and the angle refinement alike; one left on a border edge, or a
     hair from an input vertex, made a face of no area the refinement could not touch (sweep cuts
     mushroom 8:0, vase 9:0, annulus 8:0: 0.2, 0.1, 0.5 degrees). Freed, it is moved in its tangent
     plane or collapsed (darning.refine)."""
+    from .darning.refine import FLAT  # read at each call (one bound for both, tests switch it)
+
     ids = np.asarray(ids, dtype=np.int64)
     if not len(ids) or not len(F):
         return ids[:0]
-    from .metrics import min_angles
-
-    flat = F[min_angles(V, F) < FLAT_FACE]
+    flat = F[min_angles(V, F) < np.degrees(FLAT)]
     return ids[np.isin(ids, flat)]
 
 

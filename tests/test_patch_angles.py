@@ -246,9 +246,10 @@ def test_a_pinned_vertex_in_a_face_of_no_area_is_freed_for_the_refinement(monkey
     """The vertices of a patch beside a crease are kept still after their side's fairing; one left on
     a border edge made a face of no area the angle refinement could not touch (sweep cuts of
     bench/sweep.py: vase 9:0 0.12 degrees at a cap over a border edge, mushroom 8:0 0.18). Freed when
-    it is a corner of a face below repair.FLAT_FACE (1 degree), it is moved or collapsed: 2.1 and 1.5
+    it is a corner of a face below darning.refine.FLAT (1 degree), it is moved or collapsed: 2.1 and 1.5
     degrees, both at forced corners (between two border edges: no fill avoids them)."""
-    import algorithms.repair as rp
+    import sys
+
     from algorithms.metrics import min_angles
     from bench.sweep import cut_named
 
@@ -260,6 +261,6 @@ def test_a_pinned_vertex_in_a_face_of_no_area_is_freed_for_the_refinement(monkey
 
     got = {name: smallest(name) for name in ("vase:9:0", "mushroom:8:0")}
     assert min(got.values()) > 1.0, got
-    monkeypatch.setattr(rp, "FLAT_FACE", 0.0)
+    monkeypatch.setattr(sys.modules["algorithms.darning.refine"], "FLAT", 0.0)
     before = {name: smallest(name) for name in got}
     assert max(before.values()) < 0.5, before
