@@ -264,3 +264,24 @@ def test_a_pinned_vertex_in_a_face_of_no_area_is_freed_for_the_refinement(monkey
     monkeypatch.setattr(sys.modules["algorithms.darning.refine"], "FLAT", 0.0)
     before = {name: smallest(name) for name in got}
     assert max(before.values()) < 0.5, before
+
+
+def test_a_face_of_no_area_left_by_the_late_joins_is_collapsed(monkeypatch):
+    """The copies' joins after the angle refinement contract paths of new vertices onto one point and
+    may leave a face of no area no refinement sees (sweep cut cylinder-sub 5:0: 0.30 degrees, the
+    refinement had ended at 1.25). Its new vertices are collapsed where that helps
+    (repair._collapse_flat): 1.25 degrees. Switched off, the face comes back."""
+    import algorithms.repair as rp
+    from algorithms.metrics import min_angles
+    from bench.sweep import cut_named
+
+    def smallest():
+        case = cut_named("cylinder-sub:5:0")
+        model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+        res = repair(model)
+        assert res.copies_left == 0
+        return float(min_angles(res.mesh.vertices, res.mesh.faces[res.new_faces]).min())
+
+    assert smallest() > 1.0
+    monkeypatch.setattr(rp, "_collapse_flat", lambda V, F_in, F_new, n_input, locked: F_new)
+    assert smallest() < 0.5

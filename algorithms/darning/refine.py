@@ -827,7 +827,7 @@ FLAT = np.radians(1.0)  # _collapse_bad: a face with an angle below this has (al
 
 def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
                   locked: NDArray[np.int64] | None, free: NDArray[np.bool_], bad: NDArray[np.int64],
-                  below: float | None = None) -> tuple[NDArray[np.int64], int]:
+                  below: float | None = None, move: NDArray[np.bool_] | None = None) -> tuple[NDArray[np.int64], int]:
     """Remove free vertices of the bad faces by collapsing each onto the neighbour that leaves the
     best smallest angle, when that raises the smallest angle of its faces: the vertex a Delaunay
     refinement could not fix (no point was inserted this round, and moving it did not help): first
@@ -839,8 +839,8 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
     ``below`` (radians): a collapse must also leave no more faces with an angle below it than the star
     had (a star holding a forced corner has that corner's angle as its smallest whatever the collapse
     does, so the smallest angle alone would accept any collapse that does not go below it).
-    Returns (faces,
-    collapses); the removed vertex stays in ``p``, unreferenced."""
+    ``move``: the vertices that may be moved where no collapse helps (default: every ``free`` one).
+    Returns (faces, collapses); the removed vertex stays in ``p``, unreferenced."""
     stuck = unchangeable(f, len(p), fixed, locked)
     nv = len(p)
     a, b = f[stuck], np.roll(f, -1, axis=1)[stuck]
@@ -900,7 +900,7 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
         if best is None:
             # no collapse keeps the link condition and helps (e.g. c and its nearest neighbour
             # share a third one): move c to where its star's smallest angle is largest
-            if _move_best(p, star, int(c), before):
+            if (move is None or move[c]) and _move_best(p, star, int(c), before):
                 done += 1
             continue
         _, both, nf = best
