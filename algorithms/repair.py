@@ -1033,7 +1033,7 @@ def _collapse_flat(V: NDArray[np.float64], F_in: NDArray[np.int64], F_new: NDArr
     lk = np.vstack(locked) if locked else None
     if lk is not None:
         free[lk.ravel()] = False
-    ring = F_in[np.isin(F_in, F_new[flat]).any(axis=1)]
+    ring = F_in[np.isin(F_in, np.unique(F_new)).any(axis=1)]  # the link condition reads every neighbour's
     out, _ = _collapse_bad(V, F_new, ring, lk, free, flat, move=np.zeros(len(V), dtype=bool))
     return out
 
