@@ -1021,20 +1021,16 @@ def _collapse_flat(V: NDArray[np.float64], F_in: NDArray[np.int64], F_new: NDArr
     **(choice)** The copies' joins after the angle refinement contract paths of new vertices onto
     one point, and may leave a face of no area there that no refinement sees (thin-plate sweep cut
     7:0: 0.02 degrees, the refinement had ended at 1.1)."""
-    from .darning.refine import FLAT, _collapse_bad
+    from .darning.refine import _collapse_bad, no_area
 
-    if not len(F_new):
-        return F_new
-    flat = np.flatnonzero(min_angles(V, F_new) < np.degrees(FLAT))
+    flat = np.flatnonzero(no_area(V, F_new))
     if not len(flat):
         return F_new
     free = np.zeros(len(V), dtype=bool)
-    free[n_input:] = True
-    lk = np.vstack(locked) if locked else None
-    if lk is not None:
-        free[lk.ravel()] = False
+    free[n_input:] = True  # a vertex on a locked edge is no candidate (_collapse_bad's stuck edges)
     ring = F_in[np.isin(F_in, np.unique(F_new)).any(axis=1)]  # the link condition reads every neighbour's
-    out, _ = _collapse_bad(V, F_new, ring, lk, free, flat, move=np.zeros(len(V), dtype=bool))
+    out, _ = _collapse_bad(V, F_new, ring, np.vstack(locked) if locked else None, free, flat,
+                           move=np.zeros(len(V), dtype=bool))
     return out
 
 
@@ -1047,13 +1043,10 @@ def _in_flat_faces(V: NDArray[np.float64], F: NDArray[np.int64], ids: NDArray[np
     hair from an input vertex, made a face of no area the refinement could not touch (sweep cuts
     mushroom 8:0, vase 9:0, annulus 8:0: 0.2, 0.1, 0.5 degrees). Freed, it is moved in its tangent
     plane or collapsed (darning.refine)."""
-    from .darning.refine import FLAT  # read at each call (one bound for both, tests switch it)
+    from .darning.refine import no_area
 
     ids = np.asarray(ids, dtype=np.int64)
-    if not len(ids) or not len(F):
-        return ids[:0]
-    flat = F[min_angles(V, F) < np.degrees(FLAT)]
-    return ids[np.isin(ids, flat)]
+    return ids[np.isin(ids, F[no_area(V, F)])]
 
 
 def _split_pinches(V: NDArray[np.float64], F: NDArray[np.int64], n_model: int

@@ -822,7 +822,13 @@ def _insert(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int6
     return acc[:n_acc].copy(), np.vstack(faces + grow)
 
 
-FLAT = np.radians(1.0)  # _collapse_bad: a face with an angle below this has (almost) no area
+FLAT = np.radians(1.0)  # a face with an angle below this has (almost) no area
+
+
+def no_area(p: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """(M,) whether each face of ``f`` has (almost) no area: an angle below ``FLAT`` (three corners
+    on one line: a cap over an edge, or a needle at a vertex)."""
+    return corner_angles(p, f).min(axis=1) < FLAT if len(f) else np.zeros(0, dtype=bool)
 
 
 def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[np.int64],
@@ -864,7 +870,7 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
         star_ang = corner_angles(p, star).min(axis=1)
         before = star_ang.min()
         n_below = int((star_ang < below).sum()) if below is not None else 0
-        # a face of no area has no side to fold to: judged against the star's normal instead
+        # a face of no area (no_area) has no side to fold to: judged against the star's normal instead
         flat = star_ang < FLAT
         n_old[flat] = n_old.sum(axis=0)
         n_flat = int(flat.sum())
