@@ -8,7 +8,8 @@ The cut is made as ``bench.sweep`` makes it (``cut_named``). Loops are numbered 
 numbers them (``boundary.summarize``: the order of its frames), so the report's tunnel notes
 ("loops 2 and 3: ...") read against the table. For each loop, the largest distance from the
 truth to the output over the truth's points nearest to that loop (of all loops), in % of the
-diagonal: the hole whose fill (or missing tube) is off. ``--meshlib``: the same for MeshLib's bridge
+diagonal: the hole whose fill (or missing tube) is off; and the largest distance from the output
+to the truth over the output's points nearest to it: a fill that sticks out. ``--meshlib``: the same for MeshLib's bridge
 fill (the ``[bench]`` extra). Not part of the test suite; a debugging aid for the sweep's misses.
 """
 
@@ -57,19 +58,24 @@ def refusal_table(res: RepairResult, loop_of: dict[int, int]) -> dict[tuple[int,
 
 
 def worst_by_loop(case: BenchCase, V: np.ndarray, F: np.ndarray, loops: list[np.ndarray], *,
-                  samples: int = 20000) -> list[float]:
-    """Per loop: the largest truth -> output distance (% of the truth's diagonal) over the truth's
-    sample points nearest to that loop's vertices (of all loops)."""
+                  samples: int = 20000) -> list[tuple[float, float]]:
+    """Per loop: the largest distance (% of the truth's diagonal) from the truth to the output and
+    from the output to the truth, each over the sample points nearest to that loop's vertices (of
+    all loops): a fill that misses the surface, and one that sticks out of it."""
     import trimesh
 
     truth = trimesh.Trimesh(case.truth.vertices, case.truth.faces, process=False)
-    pts, _ = trimesh.sample.sample_surface(truth, samples, seed=1)
-    _, d, _ = trimesh.proximity.closest_point(trimesh.Trimesh(V, F, process=False), pts)
+    out = trimesh.Trimesh(V, F, process=False)
     owner = np.concatenate([np.full(len(lp), k) for k, lp in enumerate(loops)])
-    _, idx = cKDTree(np.vstack([case.vertices[lp] for lp in loops])).query(pts)
-    near = owner[idx]
+    tree = cKDTree(np.vstack([case.vertices[lp] for lp in loops]))
     diag = case.truth.bbox_diagonal()
-    return [float(100 * d[near == k].max(initial=0.0) / diag) for k in range(len(loops))]
+    worst = np.zeros((len(loops), 2))
+    for side, (a, b) in enumerate(((truth, out), (out, truth))):
+        pts, _ = trimesh.sample.sample_surface(a, samples, seed=1)
+        _, d, _ = trimesh.proximity.closest_point(b, pts)
+        near = owner[tree.query(pts)[1]]
+        np.maximum.at(worst[:, side], near, 100 * d / diag)
+    return [(float(x), float(y)) for x, y in worst]
 
 
 def explain(name: str, mode: str = "light", *, meshlib: bool = False, samples: int = 20000) -> dict:
@@ -121,11 +127,12 @@ def text(r: dict) -> str:
     lines.append("islands:")
     lines += [f"  {i['island']}: {i['faces']} faces, Euler {i['euler']}, {i['loops']} loops, genus {i['genus']:g}"
               for i in r["islands"]]
-    lines.append("loops (worst truth -> output distance near each, %" + (": ours / MeshLib)" if "meshlib" in
-                                                                          r["worst"] else ")") + ":")
+    lines.append("loops (worst distance near each, truth -> output and output -> truth, %"
+                 + (": ours / MeshLib)" if "meshlib" in r["worst"] else ")") + ":")
     for lp in r["loops"]:
         k = lp["loop"]
-        w = f"{r['worst']['ours'][k]:.2f}" + (f" / {r['worst']['meshlib'][k]:.2f}" if "meshlib" in r["worst"] else "")
+        w = " / ".join(f"{r['worst'][who][k][0]:.2f}, {r['worst'][who][k][1]:.2f}" for who in ("ours", "meshlib")
+                       if who in r["worst"])
         lines.append(f"  {k}: island {lp['island']}, {lp['vertices']} vertices, centre {lp['centre']}, "
                      f"radius {lp['radius']}; worst {w}")
     lines.append("arrived lines (start loop -> end loop: count, best qualities):")

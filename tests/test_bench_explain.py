@@ -39,7 +39,7 @@ def test_explain_a_torus_cut_into_islands_reads_its_islands_loops_and_bridges():
     # every island line the report counts between two loops of different islands was traced
     assert all((a, b) in r["lines"] or (b, a) in r["lines"] for a, b in joins)
     worst = np.array(r["worst"]["ours"])
-    assert len(worst) == len(r["loops"]) and np.isfinite(worst).all() and (worst >= 0).all()
+    assert worst.shape == (len(r["loops"]), 2) and np.isfinite(worst).all() and (worst >= 0).all()
     assert worst.max() < 100.0
     assert r["score"]["topology_right"] and r["score"]["genus"] == 1
     out = text(r)
