@@ -81,8 +81,18 @@ def _angles() -> None:
     refine._move_best(p, star, 2, float(corner_angles(p, star).min()))
 
 
+def _liepa() -> None:
+    """Liepa's own weight (darning/liepa.py), which the darning takes where a minimum area fill folds."""
+    from .darning.liepa import triangulate
+
+    t = np.linspace(0.0, 2 * np.pi, 8, endpoint=False)
+    p = np.c_[np.cos(t), np.sin(t), 0.3 * np.sin(2 * t)]
+    triangulate(p, weight="dihedral", outside_normals=np.tile([0.0, 0.0, 1.0], (8, 1)))
+
+
 STEPS: tuple[tuple[str, Callable[[], None]], ...] = (
     ("repair pipeline (light and full field, islands, a lost handle)", _repairs),
+    ("Liepa's weight (folded fills)", _liepa),
     ("RBF implicit of thin parts", _rbf),
     ("angle smoothing", _angles),
 )

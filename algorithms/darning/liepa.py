@@ -81,6 +81,40 @@ def triangulate(points: NDArray[np.float64], *, weight: str = "area",
     return _rebuild(M, n)
 
 
+def max_dihedral(points: NDArray[np.float64], faces: NDArray[np.int64],
+                 outside_normals: NDArray[np.float64] | None = None) -> float:
+    """The largest angle (radians) between the normals of two faces of a triangulation of the loop
+    ``points`` that share an edge, and, with ``outside_normals`` (as for ``triangulate``: the
+    surrounding face across each loop edge, zero where there is none), between a face on a loop
+    edge and the face beyond it. A face of no area counts as pi. pi means a fold: the fill turns
+    back on itself (or on the surface around it)."""
+    p = np.asarray(points, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64)
+    n = len(p)
+    nt = np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]])
+    scale = np.linalg.norm(p[f[:, 1]] - p[f[:, 0]], axis=1) * np.linalg.norm(p[f[:, 2]] - p[f[:, 0]], axis=1)
+    if (np.linalg.norm(nt, axis=1) <= 1e-6 * scale).any():
+        return float(np.pi)
+    he = np.stack([f, np.roll(f, -1, axis=1)], axis=2).reshape(-1, 2)  # face t's half-edges at 3t .. 3t+2
+    face = np.repeat(np.arange(len(f)), 3)
+    key = np.minimum(he[:, 0], he[:, 1]) * n + np.maximum(he[:, 0], he[:, 1])
+    order = np.argsort(key, kind="stable")
+    k = key[order]
+    twin = np.flatnonzero(k[1:] == k[:-1])  # interior edges: two half-edges, adjacent once sorted
+    worst = 0.0
+    if len(twin):
+        worst = float(_angle(nt[face[order[twin]]], nt[face[order[twin + 1]]]).max())
+    if outside_normals is not None:
+        nb = np.asarray(outside_normals, dtype=np.float64)
+        # loop edge j is the patch half-edge (j+1) -> j
+        on_loop = (he[:, 0] - he[:, 1]) % n == 1
+        j = he[on_loop, 1]
+        has = np.linalg.norm(nb[j], axis=1) > 0
+        if has.any():
+            worst = max(worst, float(_angle(nt[face[on_loop]][has], nb[j][has]).max()))
+    return worst
+
+
 def _rebuild(M: NDArray[np.int64], n: int) -> NDArray[np.int64]:
     """Faces from the argmin table, wound against the loop (patch side)."""
     out = np.empty((n - 2, 3), dtype=np.int64)
@@ -198,41 +232,76 @@ def _dp_dihedral(p: NDArray[np.float64], forbidden: NDArray[np.bool_] | None,
     # neighbour normal across loop edge (j, j+1) in the DP's loop-order convention (triangle
     # (i, m, k), i<m<k, has normal (v_m - v_i) x (v_k - v_i), the reverse of the patch face's):
     # the surrounding face's normal, negated.
-    nb = None if outside_normals is None else -np.asarray(outside_normals, dtype=np.float64)
-    for d in range(2, n):  # sequential: diagonal d needs every shorter diagonal
-        i = np.arange(0, n - d)
-        k = i + d
-        m = i[:, None] + np.arange(1, d)[None, :]  # (rows, d-1)
-        ii = np.broadcast_to(i[:, None], m.shape)
-        kk = np.broadcast_to(k[:, None], m.shape)
-        pi, pm, pk = p[ii], p[m], p[kk]
-        cand = W[ii, m] + W[m, kk] + _tri_weight(pi, pm, pk, "area")
-        nt = np.cross(pm - pi, pk - pi)
-        ang = np.maximum(A[ii, m], A[m, kk])
-        # across (i, m): the triangle chosen for sub-polygon (i, m), or the surrounding face
-        q = M[ii, m]
-        inner = q >= 0
-        n_im = np.cross(p[np.where(inner, q, m)] - pi, pm - pi)
-        if nb is not None:
-            n_im = np.where(inner[..., None], n_im, nb[ii])
-        ang = np.maximum(ang, np.where(inner | (nb is not None), _angle(nt, n_im), 0.0))
-        q = M[m, kk]
-        inner = q >= 0
-        n_mk = np.cross(p[np.where(inner, q, kk)] - pm, pk - pm)
-        if nb is not None:
-            n_mk = np.where(inner[..., None], n_mk, nb[m])
-        ang = np.maximum(ang, np.where(inner | (nb is not None), _angle(nt, n_mk), 0.0))
-        if d == n - 1 and nb is not None:  # the closing loop edge (v_{n-1}, v_0)
-            ang = np.maximum(ang, _angle(nt, np.broadcast_to(nb[n - 1], nt.shape)))
-        ang = np.where(np.isfinite(cand), ang, np.inf)
-        amin = ang.min(axis=1, keepdims=True)
-        best = np.argmin(np.where(ang <= amin + _ANGLE_TOL, cand, np.inf), axis=1)
-        rr = np.arange(len(i))
-        W[i, k] = cand[rr, best]
-        A[i, k] = ang[rr, best]
-        M[i, k] = m[rr, best]
-        if forbidden is not None and d < n - 1:
-            bad = forbidden[i, k]
-            W[i[bad], k[bad]] = np.inf
-            A[i[bad], k[bad]] = np.inf
+    nb = np.zeros((0, 3)) if outside_normals is None else -np.ascontiguousarray(outside_normals, dtype=np.float64)
+    fb = np.zeros((0, 0), dtype=np.bool_) if forbidden is None else np.ascontiguousarray(forbidden, dtype=np.bool_)
+    _dihedral_diagonals(np.ascontiguousarray(p), nb, outside_normals is not None, fb, forbidden is not None,
+                        W, A, M, _ANGLE_TOL)
     return float(W[0, n - 1]), M
+
+
+@numba.njit(cache=True)
+def _angle3(a0, a1, a2, b0, b1, b2):  # pragma: no cover - compiled
+    """_angle of two 3-vectors given by their coordinates."""
+    c0, c1, c2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+    return np.arctan2(np.sqrt(c0 * c0 + c1 * c1 + c2 * c2), a0 * b0 + a1 * b1 + a2 * b2)
+
+
+@numba.njit(cache=True)
+def _dihedral_diagonals(p, nb, has_nb, forbidden, has_forbidden, W, A, M, tol):  # pragma: no cover - compiled
+    """The diagonals of _dp_dihedral, compiled. For the sub-polygon (i, k) and each m between: the
+    area sum ``cand`` and the largest dihedral angle ``ang`` (of the sub-polygons' own, and of the
+    triangle (i, m, k) against the triangle chosen across (i, m) and across (m, k), or against the
+    surrounding face across a loop edge, and across the closing loop edge on the last diagonal).
+    The smallest angle wins; among angles within ``tol`` of it, the smallest area (the first on ties).
+    A degenerate triangle (three collinear points) counts as a fold (pi): with no normal, its angles
+    read 0, and the DP strung CAD borders' collinear runs into slivers of no area."""
+    n = p.shape[0]
+    cand = np.empty(n)
+    ang = np.empty(n)
+    for d in range(2, n):  # sequential: diagonal d needs every shorter diagonal
+        for i in range(n - d):
+            k = i + d
+            amin = np.inf
+            for j in range(1, d):
+                m = i + j
+                u0, u1, u2 = p[m, 0] - p[i, 0], p[m, 1] - p[i, 1], p[m, 2] - p[i, 2]
+                v0, v1, v2 = p[k, 0] - p[i, 0], p[k, 1] - p[i, 1], p[k, 2] - p[i, 2]
+                t0, t1, t2 = u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0  # the triangle's normal
+                sq = t0 * t0 + t1 * t1 + t2 * t2
+                c = W[i, m] + W[m, k] + 0.5 * np.sqrt(sq)
+                g = max(A[i, m], A[m, k])
+                if sq <= 1e-12 * (u0 * u0 + u1 * u1 + u2 * u2) * (v0 * v0 + v1 * v1 + v2 * v2):
+                    g = np.pi  # three collinear loop points (a CAD border): no normal, as bad as a fold
+                q = M[i, m]
+                if q >= 0:  # across (i, m): the triangle (i, q, m) chosen for that sub-polygon
+                    w0, w1, w2 = p[q, 0] - p[i, 0], p[q, 1] - p[i, 1], p[q, 2] - p[i, 2]
+                    g = max(g, _angle3(t0, t1, t2, w1 * u2 - w2 * u1, w2 * u0 - w0 * u2, w0 * u1 - w1 * u0))
+                elif has_nb:  # a loop edge: the surrounding face
+                    g = max(g, _angle3(t0, t1, t2, nb[i, 0], nb[i, 1], nb[i, 2]))
+                q = M[m, k]
+                if q >= 0:
+                    w0, w1, w2 = p[q, 0] - p[m, 0], p[q, 1] - p[m, 1], p[q, 2] - p[m, 2]
+                    z0, z1, z2 = p[k, 0] - p[m, 0], p[k, 1] - p[m, 1], p[k, 2] - p[m, 2]
+                    g = max(g, _angle3(t0, t1, t2, w1 * z2 - w2 * z1, w2 * z0 - w0 * z2, w0 * z1 - w1 * z0))
+                elif has_nb:
+                    g = max(g, _angle3(t0, t1, t2, nb[m, 0], nb[m, 1], nb[m, 2]))
+                if d == n - 1 and has_nb:  # the closing loop edge (v_{n-1}, v_0)
+                    g = max(g, _angle3(t0, t1, t2, nb[n - 1, 0], nb[n - 1, 1], nb[n - 1, 2]))
+                if not np.isfinite(c):
+                    g = np.inf
+                cand[j] = c
+                ang[j] = g
+                if g < amin:
+                    amin = g
+            best = np.inf
+            bj = 1
+            for j in range(1, d):
+                if ang[j] <= amin + tol and cand[j] < best:
+                    best = cand[j]
+                    bj = j
+            W[i, k] = cand[bj]
+            A[i, k] = ang[bj]
+            M[i, k] = i + bj
+            if has_forbidden and d < n - 1 and forbidden[i, k]:
+                W[i, k] = np.inf
+                A[i, k] = np.inf
