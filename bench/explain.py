@@ -9,8 +9,9 @@ numbers them (``boundary.summarize``: the order of its frames), so the report's 
 ("loops 2 and 3: ...") read against the table. For each loop, the largest distance from the
 truth to the output over the truth's points nearest to that loop (of all loops), in % of the
 diagonal: the hole whose fill (or missing tube) is off; and the largest distance from the output
-to the truth over the output's points nearest to it: a fill that sticks out. ``--meshlib``: the same for MeshLib's bridge
-fill (the ``[bench]`` extra). Not part of the test suite; a debugging aid for the sweep's misses.
+to the truth over the output's points nearest to it: a fill that sticks out. ``--meshlib``: the
+same for MeshLib's bridge fill (the ``[bench]`` extra). Not part of the test suite; a debugging aid
+for the sweep's misses.
 """
 
 from __future__ import annotations
