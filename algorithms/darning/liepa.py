@@ -28,6 +28,9 @@ from numpy.typing import NDArray
 
 WEIGHTS = ("area", "length", "dihedral")
 _ANGLE_TOL = 1e-6  # radians: max-angles closer than this are ties, the area decides (Liepa's lexicographic order)
+# a triangle (v_i, v_m, v_k) has no area when sin of its angle at v_i is at most this: |(v_m - v_i) x (v_k - v_i)|
+# <= NO_AREA |v_m - v_i| |v_k - v_i| (three collinear or coincident loop points)
+NO_AREA = 1e-6
 
 
 def _tri_weight(a: NDArray, b: NDArray, c: NDArray, weight: str) -> NDArray:
@@ -93,7 +96,7 @@ def max_dihedral(points: NDArray[np.float64], faces: NDArray[np.int64],
     n = len(p)
     nt = np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]])
     scale = np.linalg.norm(p[f[:, 1]] - p[f[:, 0]], axis=1) * np.linalg.norm(p[f[:, 2]] - p[f[:, 0]], axis=1)
-    if (np.linalg.norm(nt, axis=1) <= 1e-6 * scale).any():
+    if (np.linalg.norm(nt, axis=1) <= NO_AREA * scale).any():
         return float(np.pi)
     he = np.stack([f, np.roll(f, -1, axis=1)], axis=2).reshape(-1, 2)  # face t's half-edges at 3t .. 3t+2
     face = np.repeat(np.arange(len(f)), 3)
@@ -203,8 +206,8 @@ def _dp_diagonals(CS, CT, DS, DT, length, forbidden, has_forbidden, S, T, M, pen
                         sq += nc * nc
                     c = c + 0.5 * np.sqrt(sq)
                     # |(v_m - v_i) x (v_k - v_i)| = |v_m - v_i| |v_k - v_i| sin(angle at v_i): zero
-                    # (to 1e-6 relative) exactly when the triangle is degenerate
-                    if sq <= 1e-12 * DS[i, j] * DS[i, d]:
+                    # (to NO_AREA relative) exactly when the triangle is degenerate
+                    if sq <= NO_AREA * NO_AREA * DS[i, j] * DS[i, d]:
                         c = c + pen
                 if c < best:
                     best = c
@@ -270,7 +273,7 @@ def _dihedral_diagonals(p, nb, has_nb, forbidden, has_forbidden, W, A, M, tol): 
                 sq = t0 * t0 + t1 * t1 + t2 * t2
                 c = W[i, m] + W[m, k] + 0.5 * np.sqrt(sq)
                 g = max(A[i, m], A[m, k])
-                if sq <= 1e-12 * (u0 * u0 + u1 * u1 + u2 * u2) * (v0 * v0 + v1 * v1 + v2 * v2):
+                if sq <= NO_AREA * NO_AREA * (u0 * u0 + u1 * u1 + u2 * u2) * (v0 * v0 + v1 * v1 + v2 * v2):
                     g = np.pi  # three collinear loop points (a CAD border): no normal, as bad as a fold
                 q = M[i, m]
                 if q >= 0:  # across (i, m): the triangle (i, q, m) chosen for that sub-polygon
