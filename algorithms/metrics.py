@@ -228,15 +228,24 @@ class Distances:
         return asdict(self)
 
 
+def distance_samples(vertices: NDArray[np.float64], faces: NDArray[np.int64], ref_vertices: NDArray[np.float64],
+                     ref_faces: NDArray[np.int64], *, samples: int = 20000, seed: int = 1
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The points ``distances`` measures and their exact distances: (points on the mesh, their
+    distance to the reference, points on the reference, their distance to the mesh); each set is
+    ``samples`` area-uniform points and the vertices."""
+    rv = np.asarray(ref_vertices, dtype=np.float64)
+    pm = np.vstack([sample_surface(vertices, faces, samples, seed=seed), np.asarray(vertices)])
+    pr = np.vstack([sample_surface(rv, ref_faces, samples, seed=seed + 1), rv])
+    return pm, point_to_surface(pm, rv, ref_faces), pr, point_to_surface(pr, vertices, faces)
+
+
 def distances(vertices: NDArray[np.float64], faces: NDArray[np.int64], ref_vertices: NDArray[np.float64],
               ref_faces: NDArray[np.int64], *, samples: int = 20000, seed: int = 1) -> Distances:
     """Sampled symmetric Hausdorff and mean distance, exact point-to-surface both ways."""
     rv = np.asarray(ref_vertices, dtype=np.float64)
     diag = float(np.linalg.norm(rv.max(axis=0) - rv.min(axis=0)))
-    pm = np.vstack([sample_surface(vertices, faces, samples, seed=seed), np.asarray(vertices)])
-    pr = np.vstack([sample_surface(rv, ref_faces, samples, seed=seed + 1), rv])
-    d1 = point_to_surface(pm, rv, ref_faces)
-    d2 = point_to_surface(pr, vertices, faces)
+    _, d1, _, d2 = distance_samples(vertices, faces, rv, ref_faces, samples=samples, seed=seed)
     return Distances(float(max(d1.max(), d2.max()) / diag), float((d1.mean() + d2.mean()) / 2 / diag),
                      float(d1.max() / diag), float(d2.max() / diag), diag)
 

@@ -24,10 +24,12 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from algorithms.boundary import summarize
+from algorithms.metrics import distance_samples
 from algorithms.normalize import normalize
 from algorithms.params import FieldParams
 from algorithms.repair import RepairParams, RepairResult, repair
 from bench.cases import BenchCase
+from bench.repair import merge_positions
 
 
 def line_table(res: RepairResult, loop_of: dict[int, int]) -> dict[tuple[int, int], list[float]]:
@@ -61,21 +63,18 @@ def refusal_table(res: RepairResult, loop_of: dict[int, int]) -> dict[tuple[int,
 def worst_by_loop(case: BenchCase, V: np.ndarray, F: np.ndarray, loops: list[np.ndarray], *,
                   samples: int = 20000) -> list[tuple[float, float]]:
     """Per loop: the largest distance (% of the truth's diagonal) from the truth to the output and
-    from the output to the truth, each over the sample points nearest to that loop's vertices (of
-    all loops): a fill that misses the surface, and one that sticks out of it."""
-    import trimesh
-
-    truth = trimesh.Trimesh(case.truth.vertices, case.truth.faces, process=False)
-    out = trimesh.Trimesh(V, F, process=False)
+    from the output to the truth, each over the points nearest to that loop's vertices (of all
+    loops): a fill that misses the surface, and one that sticks out of it. The points are those the
+    score measures (``metrics.distance_samples`` on the output merged by position, as
+    ``bench.repair.score`` does), so the largest of all is the score's Hausdorff distance."""
+    diag = case.truth.bbox_diagonal()
+    mv, mf = merge_positions(V, F, 1e-6 * diag)
+    pm, d_out, pr, d_in = distance_samples(mv, mf, case.truth.vertices, case.truth.faces, samples=samples)
     owner = np.concatenate([np.full(len(lp), k) for k, lp in enumerate(loops)])
     tree = cKDTree(np.vstack([case.vertices[lp] for lp in loops]))
-    diag = case.truth.bbox_diagonal()
     worst = np.zeros((len(loops), 2))
-    for side, (a, b) in enumerate(((truth, out), (out, truth))):
-        pts, _ = trimesh.sample.sample_surface(a, samples, seed=1)
-        _, d, _ = trimesh.proximity.closest_point(b, pts)
-        near = owner[tree.query(pts)[1]]
-        np.maximum.at(worst[:, side], near, 100 * d / diag)
+    for side, (pts, d) in enumerate(((pr, d_in), (pm, d_out))):
+        np.maximum.at(worst[:, side], owner[tree.query(pts)[1]], 100 * d / diag)
     return [(float(x), float(y)) for x, y in worst]
 
 

@@ -1,6 +1,7 @@
 """bench.explain, the sweep's debugging aid: its tables agree with the cut and with the repair."""
 
 import numpy as np
+import pytest
 
 from algorithms.normalize import normalize
 from algorithms.topology import boundary_loops, euler_characteristic, islands
@@ -13,8 +14,8 @@ def test_explain_a_torus_cut_into_islands_reads_its_islands_loops_and_bridges():
     normalised cut has and what the repair did. The islands' Euler characteristics add up to the
     surface's once the vertices where islands touch are counted once, every loop is one island's
     and the loops are the surface's boundary loops, every island bridge joins loops of two islands
-    between which a line arrived, and the per-loop worst distances are distances (finite, below
-    the diagonal)."""
+    between which a line arrived, and the per-loop worst distances split the score's sample points
+    (their largest is the score's Hausdorff distance)."""
     name = "thin-torus:2:1"
     r = explain(name, samples=4000)
     case = cut_named(name)
@@ -40,7 +41,9 @@ def test_explain_a_torus_cut_into_islands_reads_its_islands_loops_and_bridges():
     assert all((a, b) in r["lines"] or (b, a) in r["lines"] for a, b in joins)
     worst = np.array(r["worst"]["ours"])
     assert worst.shape == (len(r["loops"]), 2) and np.isfinite(worst).all() and (worst >= 0).all()
+    # the per-loop maxima split the points the score measures: the largest is its Hausdorff distance
     assert worst.max() < 100.0
+    assert worst.max() == pytest.approx(100 * r["score"]["hausdorff"], rel=1e-9)
     assert r["score"]["topology_right"] and r["score"]["genus"] == 1
     out = text(r)
     assert out.startswith(f"{name} (light): truth genus 1")

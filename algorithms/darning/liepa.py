@@ -26,6 +26,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from ..topology import face_adjacency
+
 WEIGHTS = ("area", "length", "dihedral")
 _ANGLE_TOL = 1e-6  # radians: max-angles closer than this are ties, the area decides (Liepa's lexicographic order)
 # a triangle (v_i, v_m, v_k) has no area when sin of its angle at v_i is at most this: |(v_m - v_i) x (v_k - v_i)|
@@ -98,17 +100,12 @@ def max_dihedral(points: NDArray[np.float64], faces: NDArray[np.int64],
     scale = np.linalg.norm(p[f[:, 1]] - p[f[:, 0]], axis=1) * np.linalg.norm(p[f[:, 2]] - p[f[:, 0]], axis=1)
     if (np.linalg.norm(nt, axis=1) <= NO_AREA * scale).any():
         return float(np.pi)
-    he = np.stack([f, np.roll(f, -1, axis=1)], axis=2).reshape(-1, 2)  # face t's half-edges at 3t .. 3t+2
-    face = np.repeat(np.arange(len(f)), 3)
-    key = np.minimum(he[:, 0], he[:, 1]) * n + np.maximum(he[:, 0], he[:, 1])
-    order = np.argsort(key, kind="stable")
-    k = key[order]
-    twin = np.flatnonzero(k[1:] == k[:-1])  # interior edges: two half-edges, adjacent once sorted
-    worst = 0.0
-    if len(twin):
-        worst = float(_angle(nt[face[order[twin]]], nt[face[order[twin + 1]]]).max())
+    pairs = face_adjacency(f)  # the faces on each interior edge
+    worst = float(_angle(nt[pairs[:, 0]], nt[pairs[:, 1]]).max()) if len(pairs) else 0.0
     if outside_normals is not None:
         nb = np.asarray(outside_normals, dtype=np.float64)
+        he = np.stack([f, np.roll(f, -1, axis=1)], axis=2).reshape(-1, 2)  # face t's half-edges at 3t .. 3t+2
+        face = np.repeat(np.arange(len(f)), 3)
         # loop edge j is the patch half-edge (j+1) -> j
         on_loop = (he[:, 0] - he[:, 1]) % n == 1
         j = he[on_loop, 1]
