@@ -740,3 +740,25 @@ def test_two_lines_one_way_between_holes_far_apart_make_no_handle(monkeypatch):
     assert "one way only, too far apart for a tunnel" in res.tunnel_note
     monkeypatch.setattr(rf, "ONE_WAY_REACH", np.inf)
     assert topology(repair(model, RepairParams(field=FieldParams(mode="full"))).mesh.faces).genus == 1
+
+
+def test_lines_across_a_concave_corner_between_two_holes_make_no_handle(monkeypatch):
+    """bench/sweep.py cut mushroom:3:1, full mode: a slab took a band over the cap and round the
+    stem's top, leaving loops on the cap (0, 1) and on the stem under it (2). Four lines from each cap
+    loop reached the stem's loop, shortest of all: across the air in the corner under the cap (0.28
+    long, their middles 0.056 from the surface), and one from tip to tip of two loops (0.027, along
+    the stem's rim). The tunnel rule read two tunnels; the output had a handle the mushroom does not
+    have and a vertex where two sheets touched (not closed once merged by position). The input's
+    edges join each line's ends within 1.0-1.6 times its length (repair_field.surface_shortcuts):
+    the lines cut across surface that is there, as lines over a flat face between two holes do."""
+    import algorithms.repair_field as rf
+    from bench.sweep import make_cut
+
+    case = make_cut("mushroom", 3, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=0, mode="full")
+    assert "all along the surface between them: no tunnel" in res.tunnel_note
+    assert not any(b.kind == "tunnel" for b in res.bridges) and res.copies_left == 0
+    monkeypatch.setattr(rf, "SHORTCUT", 0.0)  # the shortcut test off: the handle comes back
+    res = repair(model, RepairParams(field=FieldParams(mode="full")))
+    assert any(b.kind == "tunnel" for b in res.bridges) and res.copies_left == 1

@@ -31,7 +31,7 @@ from algorithms.normalize import normalize
 from algorithms.params import FieldParams
 from algorithms.records import ARRIVED, ForceLine
 from algorithms.repair import RepairParams, repair
-from algorithms.repair_field import _off_surface_pairs, tunnel_pairs
+from algorithms.repair_field import _off_surface_pairs, surface_shortcuts, tunnel_pairs
 
 trimesh = pytest.importorskip("trimesh")
 
@@ -173,25 +173,65 @@ def _line_between(a: int, b: int, z: np.ndarray) -> ForceLine:
 
 
 def test_a_tunnel_whose_every_line_runs_on_the_surface_is_none():
-    # a flat square; loops 1 and 2 own vertices 0 and 1; lines from 0 to 1 in the plane, or arching
-    # over it (through the air, as across the gap of a cut tube)
+    # the unit square without its middle column of cells: two pieces [0, 0.4] and [0.6, 1] in x that
+    # nothing joins; loops 1 and 2 own its corners 0 and 5, one on each. Lines between them in the
+    # plane (their middle halves mostly over the pieces), or arching over it (through the air, as
+    # across the gap of a cut tube)
     g = np.linspace(0.0, 1.0, 6)
     V = np.array([(x, y, 0.0) for y in g for x in g])
-    F = np.array([f for j in range(5) for i in range(5) for f in ((j * 6 + i, j * 6 + i + 1, j * 6 + i + 7),
-                                                                (j * 6 + i, j * 6 + i + 7, j * 6 + i + 6))])
+    F = np.array([f for j in range(5) for i in range(5) if i != 2
+                  for f in ((j * 6 + i, j * 6 + i + 1, j * 6 + i + 7), (j * 6 + i, j * 6 + i + 7, j * 6 + i + 6))])
     mesh = Mesh(V, F)
-    flat = [_line_between(0, 1, np.zeros(9)), _line_between(1, 0, np.full(9, 0.002))]  # 0.25 % of its length off
-    arch = _line_between(0, 1, 0.3 * np.sin(np.linspace(0.0, np.pi, 9)))
-    pos_in = {0: 1, 1: 2}
+    flat = [_line_between(0, 5, np.zeros(9)), _line_between(5, 0, np.full(9, 0.002))]  # 0.25 % of its length off
+    arch = _line_between(0, 5, 0.3 * np.sin(np.linspace(0.0, np.pi, 9)))
+    pos_in = {0: 1, 5: 2}
     kept, left = _off_surface_pairs(flat, pos_in, mesh)
     assert kept == [] and left == [(1, 2)]
     kept, left = _off_surface_pairs(flat + [arch], pos_in, mesh)  # one line across a gap: the pair stays
     assert len(kept) == 3 and left == []
     # 2 % of its length above the surface: off it (the test reads the middle half of each line)
-    kept, left = _off_surface_pairs([_line_between(0, 1, np.full(9, 0.016)), arch], pos_in, mesh)
+    kept, left = _off_surface_pairs([_line_between(0, 5, np.full(9, 0.016)), arch], pos_in, mesh)
     assert len(kept) == 2 and left == []
-    kept, left = _off_surface_pairs([_line_between(0, 1, np.full(9, 0.016))] * 2, pos_in, mesh)
+    kept, left = _off_surface_pairs([_line_between(0, 5, np.full(9, 0.016))] * 2, pos_in, mesh)
     assert len(kept) == 2
+    # the whole square: its faces join corners 0 and 5 by the bottom row's edges (length 1), no
+    # longer than the arch (SHORTCUT times it): the arch cuts across surface that is there
+    whole = Mesh(V, np.array([f for j in range(5) for i in range(5) for f in (
+        (j * 6 + i, j * 6 + i + 1, j * 6 + i + 7), (j * 6 + i, j * 6 + i + 7, j * 6 + i + 6))]))
+    assert surface_shortcuts([arch], whole).tolist() == [True]
+    assert surface_shortcuts([arch], mesh).tolist() == [False]
+    kept, left = _off_surface_pairs(flat + [arch], pos_in, whole)
+    assert kept == [] and left == [(1, 2)]
+
+
+def test_a_shortcut_is_measured_along_edges_against_the_line_s_length():
+    """repair_field.surface_shortcuts on two unit squares meeting at a right angle (a concave corner,
+    as under the mushroom's cap): a line from a far corner of one to the far corner of the other
+    across the air is sqrt(2) long, the edge path along the two sides 2 (ratio 1.41, below SHORTCUT
+    = 2); at a factor of 1.3 it is no shortcut. A ring of the same faces cut across (a tube cut in
+    two): the line across the cut has its ends joined only the long way round."""
+    g = np.linspace(0.0, 1.0, 5)
+    floor = [(x, y, 0.0) for y in g for x in g]  # y in [0, 1], z = 0
+    wall = [(x, 0.0, z) for z in g[1:] for x in g]  # the wall y = 0 above it, sharing the row y = 0
+    V = np.array(floor + wall)
+
+    def cells(rows):
+        return [f for j in range(len(rows) - 1) for i in range(4)
+                for f in ((rows[j][i], rows[j][i + 1], rows[j + 1][i + 1]),
+                          (rows[j][i], rows[j + 1][i + 1], rows[j + 1][i]))]
+
+    floor_rows = [[j * 5 + i for i in range(5)] for j in range(5)]
+    wall_rows = [floor_rows[0]] + [[25 + j * 5 + i for i in range(5)] for j in range(4)]
+    mesh = Mesh(V, np.array(cells(floor_rows) + cells(wall_rows)))
+    a, b = 22, 25 + 15 + 2  # (0.5, 1, 0) on the floor's far edge, (0.5, 0, 1) on the wall's top
+    pts = np.linspace(V[a], V[b], 9)
+    line = ForceLine(pts, pts * 0, pts * 0, np.ones(9), ARRIVED, a, 0, b, 0)
+    assert np.linalg.norm(V[b] - V[a]) == pytest.approx(np.sqrt(2))
+    assert surface_shortcuts([line], mesh).tolist() == [True]
+    assert surface_shortcuts([line], mesh, factor=1.3).tolist() == [False]
+    # no path at all (the wall alone, the floor's vertex on no face): no shortcut
+    only_wall = Mesh(V, np.array(cells(wall_rows)))
+    assert surface_shortcuts([line], only_wall).tolist() == [False]
 
 
 def test_a_split_line_that_cuts_off_input_faces_is_told_from_one_across_a_hole():
