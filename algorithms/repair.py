@@ -547,6 +547,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
     # the input joins to another that way has its handle there: no tunnel to a third loop
     pinch_group = (_loop_groups(_pinch_joins(walk_holes(loops, bridges, chains), copies, bridges), loop_of)
                    if join_pinches else {})
+    pinch_copies = {v for vs in copies.values() if len(vs) > 1 for v in vs}
     if params.tunnels != "off":
         step(0.35, "looking for lost handles")
         multi = {i.index for i in summary.islands if len(i.loops) >= 2}
@@ -575,6 +576,9 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
                 pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
                 if _past_a_pinch(pair, pinch_group):
                     rejected.append((b.candidate, PAST_A_PINCH))
+                    continue
+                if join_pinches and not {b.start, b.end}.isdisjoint(pinch_copies):
+                    rejected.append((b.candidate, AT_A_PINCH))
                     continue
                 if pair in long_rims:  # facing rims across a long gap: bridges along the tube, below (_rim_bridges)
                     rejected.append((b.candidate, "between facing rims across a long gap: bridges along the tube"))
@@ -1206,6 +1210,7 @@ def _pinch_joins(holes: list[Hole], copies: dict[int, list[int]], bridges: list[
 
 # why a tunnel line is not a bridge (_past_a_pinch)
 PAST_A_PINCH = "from a loop the input joins to another loop at a pinch: the handle is there"
+AT_A_PINCH = "ends at a copy of a vertex where the input touches itself: its copies are joined there"
 
 
 def _loop_groups(joins: list[Bridge], loop_of: dict[int, tuple[int, int]]) -> dict[int, int]:

@@ -762,3 +762,20 @@ def test_lines_across_a_concave_corner_between_two_holes_make_no_handle(monkeypa
     monkeypatch.setattr(rf, "SHORTCUT", 0.0)  # the shortcut test off: the handle comes back
     res = repair(model, RepairParams(field=FieldParams(mode="full")))
     assert any(b.kind == "tunnel" for b in res.bridges) and res.copies_left == 1
+
+
+def test_a_tunnel_bridge_does_not_take_a_pinch_s_copy():
+    """bench/sweep.py cut featuretype:3:1, full mode: loops 0 and 2 touch at pinches (copies of input
+    vertices) and eight lines join them. In the run with the pinches joined (repair.repair's second
+    run), two tunnel bridges ended at copies (one 0.046 long, to the copy of a vertex two places
+    along its own loop); a vertex takes one bridge, so those copies could not be joined, and one was
+    left apart: merged by position, a vertex where two sheets touch (not closed). Tunnel bridges at
+    copies are refused in that run (repair.AT_A_PINCH): genus 9, as the truth."""
+    from algorithms.repair import AT_A_PINCH
+    from bench.sweep import make_cut
+
+    case = make_cut("featuretype", 3, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=9, mode="full")
+    assert res.copies_left == 0
+    assert any(why == AT_A_PINCH for _, why in res.rejected)
