@@ -139,12 +139,26 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
                     to = -1  # joins no loop, and still beats weaker lines of its start loop
                     sheet += 1
                 from_loop.setdefault(k, []).append((to, ln))
+    # pairs of loops the surface already joins (every line between them runs on it or cuts across
+    # it, _off_surface_pairs): their lines join nothing, and they do not beat their start loops'
+    # other lines either (a tunnel's lines lose only to lines across their own holes)
+    along: list[tuple[int, int]] = []
+    if not ALONG_COMPETES:
+        _, along = _off_surface_pairs([ln for k, got in from_loop.items() for to, ln in got if to not in (k, -1)],
+                                      pos_in, model.mesh)
+    if along:
+        counts = {pair: sum(tuple(sorted((k, to))) == pair for k, got in from_loop.items() for to, _ in got)
+                  for pair in along}
+        from_loop = {k: [(to, ln) for to, ln in got if tuple(sorted((k, to))) not in along]
+                     for k, got in from_loop.items()}
     facing = facing_rims(frames, loop_ids)
     centre = {k: frames[k].points.mean(axis=0) for k in loop_ids}
     size = {k: loop_radius(frames[k]) for k in loop_ids}
     near = {(a, b) for a in loop_ids for b in loop_ids if a < b and
             float(np.linalg.norm(centre[a] - centre[b])) <= ONE_WAY_REACH * max(size[a], size[b])}
     chosen, notes = tunnel_pairs(from_loop, loop_ids, force=force, facing=facing, near=near)
+    notes += [f"loops {a} and {b}: {counts[(a, b)]} lines join them, all along the surface between them: no tunnel"
+              for a, b in along]
     if not force and chosen:  # lines that all run along surface that is there: no tunnel
         chosen, flat = _off_surface_pairs(chosen, pos_in, model.mesh)
         for a, b in flat:
@@ -166,6 +180,7 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     return LineSet(lc_inter, tuple(chosen), tuple(every), "; ".join(notes), rims)
 
 
+ALONG_COMPETES = False  # tunnel_lines: True, lines of pairs the surface joins still compete (the rule before)
 ON_SURFACE = 0.01  # runs_on_surface: a line lies on the surface within this share of its length
 
 
