@@ -764,13 +764,15 @@ def test_lines_across_a_concave_corner_between_two_holes_make_no_handle(monkeypa
     assert any(b.kind == "tunnel" for b in res.bridges) and res.copies_left == 1
 
 
-def test_a_tunnel_bridge_does_not_take_a_pinch_s_copy():
+def test_a_tunnel_line_along_its_own_loop_to_a_pinch_is_no_bridge():
     """bench/sweep.py cut featuretype:3:1, full mode: loops 0 and 2 touch at pinches (copies of input
-    vertices) and eight lines join them. In the run with the pinches joined (repair.repair's second
-    run), two tunnel bridges ended at copies (one 0.046 long, to the copy of a vertex two places
-    along its own loop); a vertex takes one bridge, so those copies could not be joined, and one was
-    left apart: merged by position, a vertex where two sheets touch (not closed). Tunnel bridges at
-    copies are refused in that run (repair.AT_A_PINCH): genus 9, as the truth."""
+    vertices) and eight lines join them. One, 0.046 long, ran from loop 0 to the copy of a vertex two
+    places along loop 0 itself: made a tunnel bridge, it took that copy (a vertex takes one bridge),
+    which stayed apart (merged by position, a vertex where two sheets touch: not closed; genus 10 as
+    written, truth 9). Such a line is refused (repair._to_own_pinch, repair.AT_A_PINCH). A tunnel line
+    that starts at a copy and runs 0.3 to another loop is a bridge like any other: featuretype:1:0,
+    whose handle between loops 0 and 6 needs it (refusing every tunnel bridge at a copy: genus 8)."""
+    from algorithms.boundary import summarize
     from algorithms.repair import AT_A_PINCH
     from bench.sweep import make_cut
 
@@ -779,3 +781,33 @@ def test_a_tunnel_bridge_does_not_take_a_pinch_s_copy():
     res = closed_repair(model, genus=9, mode="full")
     assert res.copies_left == 0
     assert any(why == AT_A_PINCH for _, why in res.rejected)
+    case = make_cut("featuretype", 1, 0)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=9)
+    loop = {int(v): k for k, f in enumerate(summarize(model).loops) for v in f.vertices}
+    assert sum(b.kind == "tunnel" and {loop.get(b.start), loop.get(b.end)} == {0, 6} for b in res.bridges) >= 2
+
+
+def test_a_tunnel_beaten_only_by_lines_along_the_surface_is_kept_untwisted(monkeypatch):
+    """bench/sweep.py cut frep-plate3:8:1 (the F-rep plate with three through-holes), light mode: a slab
+    took the top face round the middle hole and the top of its wall; the wall's cut edge is a ring
+    (loop 2) inside the hole. Its lines all reach the slab's loop 1; loop 1's lines to loop 2 lost to
+    two lines of loop 1 along the surface to a hole beside it (a pair the rule itself calls "all along
+    the surface: no tunnel"): the hole was capped (genus 2, truth 3). Lines of such pairs do not
+    compete now (repair_field.ALONG_COMPETES). The tunnel's fourth bridge met the loops across the
+    other three (a twist, genus 4): a tunnel's bridges keep the loops' opposite orders
+    (repair.TUNNEL_ORDER, as island bridges do)."""
+    import algorithms.repair as rp
+    import algorithms.repair_field as rf
+    from bench.sweep import make_cut
+
+    case = make_cut("frep-plate3", 8, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=3)
+    assert "loops 1 and 2: 9 lines join them, a tunnel" in res.tunnel_note
+    assert any(why == rp.TUNNEL_CROSSED for _, why in res.rejected)
+    monkeypatch.setattr(rp, "TUNNEL_ORDER", False)
+    assert topology(repair(model, RepairParams()).mesh.faces).genus == 4
+    monkeypatch.setattr(rf, "ALONG_COMPETES", True)
+    res = repair(model, RepairParams())
+    assert topology(res.mesh.faces).genus == 2 and "loops 1 and 2: 9 lines join them, beaten" in res.tunnel_note
