@@ -576,7 +576,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
                 if _past_a_pinch(pair, pinch_group):
                     rejected.append((b.candidate, PAST_A_PINCH))
                     continue
-                if _to_own_pinch(b, loops, loop_of, copies, origin):
+                if _at_the_pairs_pinch(b, loop_of, copies, origin):
                     rejected.append((b.candidate, AT_A_PINCH))
                     continue
                 if pair in long_rims:  # facing rims across a long gap: bridges along the tube, below (_rim_bridges)
@@ -1215,8 +1215,8 @@ PAST_A_PINCH = "from a loop the input joins to another loop at a pinch: the hand
 # a tunnel's bridges between two loops meet them in the loops' opposite orders (_crossed_order)
 TUNNEL_ORDER = True
 TUNNEL_CROSSED = "meets the two loops across the tunnel's other bridges (crossed order: a twist)"
-AT_A_PINCH = "runs along its own loop to a copy of a vertex where the input touches itself (the pinch joins them)"
-OWN_PINCH = 3  # _to_own_pinch: places along the start's loop
+AT_A_PINCH = "ends at a point where the input joins its two loops (a pinch): the pinch joins them there"
+
 
 
 def _loop_groups(joins: list[Bridge], loop_of: dict[int, tuple[int, int]]) -> dict[int, int]:
@@ -1235,26 +1235,28 @@ def _loop_groups(joins: list[Bridge], loop_of: dict[int, tuple[int, int]]) -> di
     return {int(k): int(label[k]) for k in np.unique(pairs)}
 
 
-def _to_own_pinch(b: Bridge, loops: list[NDArray[np.int64]], loop_of: dict[int, tuple[int, int]],
-                  copies: dict[int, list[int]], origin: NDArray[np.int64], reach: int = OWN_PINCH) -> bool:
-    """Whether bridge ``b`` ends at a copy of an input vertex whose other copy lies at most ``reach``
-    places from its start along the start's own loop (or the other way round): the line runs along
-    its own border to a point where the input touches itself, and joins the two loops only there,
-    as the pinch's zero-length join does (:func:`_pinch_joins`).
+def _at_the_pairs_pinch(b: Bridge, loop_of: dict[int, tuple[int, int]], copies: dict[int, list[int]],
+                        origin: NDArray[np.int64]) -> bool:
+    """Whether an end of bridge ``b`` is a copy of an input vertex whose other copy lies on the loop of
+    its other end: the input joins the two loops at that point (a pinch), and the bridge would join
+    them there a second time. A bridge between two copies of one vertex is that pinch's own join
+    (``as_bridges``: a line to a copy of its start's neighbour).
 
-    **(choice)** Such a line is no line between two loops. featuretype cut 3:1, full mode: a tunnel
-    line 0.046 long from loop 0 to the copy of a vertex two places along loop 0 became a bridge; a
-    vertex takes one bridge, the copy stayed apart (a vertex where two sheets touch: not closed) and
-    the genus was 10 as written (truth 9). One place along is the neighbour's copy: ``as_bridges``
-    makes that line the copies' join (``along_edge_to_copy``)."""
-    for a, c in ((b.start, b.end), (b.end, b.start)):
-        k, i = loop_of[a]
-        n = len(loops[k])
-        for w in copies.get(int(origin[c]), ()):
-            if w == c or w not in loop_of or loop_of[w][0] != k:
-                continue
-            if min((loop_of[w][1] - i) % n, (i - loop_of[w][1]) % n) <= reach:
-                return True
+    **(choice)**, beyond the spec, for the tunnel rule: the pinch joins the loops there (in the runs
+    with zero-length bridges between copies, :func:`_pinch_joins`, or through the patches after the
+    darning), and a vertex takes one bridge, so a tunnel bridge at the copy keeps it apart.
+    featuretype cut 3:1, full mode: a line 0.046 long from loop 0 to the copy of a vertex two places
+    along loop 0 itself (one copy left apart: a vertex where two sheets touch, not closed, genus 10
+    as written, truth 9); cut 4:1, full mode: four lines from loop 1 to the copy of a vertex of loop
+    1 on loop 3, two copies apart (genus 10 as written). A line from a copy whose other copy is on
+    its own loop (a pinch of that loop alone) is a bridge like any other: featuretype cut 1:0 needs
+    one for its handle."""
+    if origin[b.start] == origin[b.end]:
+        return False
+    for v, other in ((b.start, b.end), (b.end, b.start)):
+        k = loop_of[other][0]
+        if any(w != v and w in loop_of and loop_of[w][0] == k for w in copies.get(int(origin[v]), ())):
+            return True
     return False
 
 

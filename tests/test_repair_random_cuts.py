@@ -764,23 +764,26 @@ def test_lines_across_a_concave_corner_between_two_holes_make_no_handle(monkeypa
     assert any(b.kind == "tunnel" for b in res.bridges) and res.copies_left == 1
 
 
-def test_a_tunnel_line_along_its_own_loop_to_a_pinch_is_no_bridge():
-    """bench/sweep.py cut featuretype:3:1, full mode: loops 0 and 2 touch at pinches (copies of input
-    vertices) and eight lines join them. One, 0.046 long, ran from loop 0 to the copy of a vertex two
-    places along loop 0 itself: made a tunnel bridge, it took that copy (a vertex takes one bridge),
-    which stayed apart (merged by position, a vertex where two sheets touch: not closed; genus 10 as
-    written, truth 9). Such a line is refused (repair._to_own_pinch, repair.AT_A_PINCH). A tunnel line
-    that starts at a copy and runs 0.3 to another loop is a bridge like any other: featuretype:1:0,
-    whose handle between loops 0 and 6 needs it (refusing every tunnel bridge at a copy: genus 8)."""
+def test_a_tunnel_bridge_does_not_end_at_the_pinch_of_its_two_loops():
+    """bench/sweep.py cuts featuretype 3:1 and 4:1, full mode: loops 0 and 2 (3:1) touch at pinches
+    (copies of input vertices), and lines between them ended at such copies: one 0.046 long from loop
+    0 to the copy of a vertex two places along loop 0 itself. A vertex takes one bridge: the copy a
+    tunnel bridge took stayed apart (merged by position, a vertex where two sheets touch: not closed;
+    genus 10 as written, truth 9). A bridge end at a copy whose other copy lies on the loop of its
+    other end is refused (repair._at_the_pairs_pinch, repair.AT_A_PINCH): the pinch joins the two
+    loops there. A line from a copy whose other copy is on its own loop is a bridge like any other:
+    featuretype:1:0, whose handle between loops 0 and 6 needs one (refusing every tunnel bridge at a
+    copy: genus 8)."""
     from algorithms.boundary import summarize
     from algorithms.repair import AT_A_PINCH
     from bench.sweep import make_cut
 
-    case = make_cut("featuretype", 3, 1)
-    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
-    res = closed_repair(model, genus=9, mode="full")
-    assert res.copies_left == 0
-    assert any(why == AT_A_PINCH for _, why in res.rejected)
+    for seed, cut_ in ((3, 1), (4, 1)):
+        case = make_cut("featuretype", seed, cut_)
+        model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+        res = closed_repair(model, genus=9, mode="full")
+        assert res.copies_left == 0
+        assert any(why == AT_A_PINCH for _, why in res.rejected)
     case = make_cut("featuretype", 1, 0)
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
     res = closed_repair(model, genus=9)
