@@ -1218,7 +1218,6 @@ TUNNEL_CROSSED = "meets the two loops across the tunnel's other bridges (crossed
 AT_A_PINCH = "ends at a point where the input joins its two loops (a pinch): the pinch joins them there"
 
 
-
 def _loop_groups(joins: list[Bridge], loop_of: dict[int, tuple[int, int]]) -> dict[int, int]:
     """loop -> a label shared by the loops that ``joins`` join (connected components), for the loops
     of joins between two different loops only."""
