@@ -1212,7 +1212,9 @@ def _pinch_joins(holes: list[Hole], copies: dict[int, list[int]], bridges: list[
 
 # why a tunnel line is not a bridge (_past_a_pinch)
 PAST_A_PINCH = "from a loop the input joins to another loop at a pinch: the handle is there"
-# a tunnel's bridges between two loops meet them in the loops' opposite orders (_crossed_order)
+# a tunnel's bridges between two loops meet them in the loops' opposite orders (_crossed_order), as
+# island bridges do: frep-plate3 8:1 light (genus 4) and featuretype+cross 1:0 full (genus 10, truth
+# 9 both) had a bridge across the others, a twist
 TUNNEL_ORDER = True
 TUNNEL_CROSSED = "meets the two loops across the tunnel's other bridges (crossed order: a twist)"
 AT_A_PINCH = "ends at a point where the input joins its two loops (a pinch): the pinch joins them there"
@@ -1249,7 +1251,10 @@ def _at_the_pairs_pinch(b: Bridge, loop_of: dict[int, tuple[int, int]], copies: 
     as written, truth 9); cut 4:1, full mode: four lines from loop 1 to the copy of a vertex of loop
     1 on loop 3, two copies apart (genus 10 as written). A line from a copy whose other copy is on
     its own loop (a pinch of that loop alone) is a bridge like any other: featuretype cut 1:0 needs
-    one for its handle."""
+    one for its handle. On the sweep (seeds 1-10, cross and speckle cuts of seeds 1-2) it set right
+    featuretype 3:1 and 4:1 full and lost none; torus-thick+cross 1:0 light (right before and
+    after) came 0.09 -> 0.31 % off the truth:
+    its first run now leaves no copy apart, where the third run's pinch joins did the tunnel's work."""
     if origin[b.start] == origin[b.end]:
         return False
     for v, other in ((b.start, b.end), (b.end, b.start)):

@@ -141,7 +141,11 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
                 from_loop.setdefault(k, []).append((to, ln))
     # pairs of loops the surface already joins (every line between them runs on it or cuts across
     # it, _off_surface_pairs): their lines join nothing, and they do not beat their start loops'
-    # other lines either (a tunnel's lines lose only to lines across their own holes)
+    # other lines either (a tunnel's lines lose only to lines across their own holes).
+    # **(choice)** frep-plate3 cut 8:1 (bench/sweep.py, light): a cut hole's wall ring sent all its
+    # lines up to the slab's loop, whose lines to it lost to two along the surface to a hole beside
+    # it; the hole was capped (genus 2, truth 3). On seeds 1-10 and the cross and speckle cuts of
+    # seeds 1-2 it changed nothing else.
     along: list[tuple[int, int]] = []
     if not ALONG_COMPETES:
         _, along = _off_surface_pairs([ln for k, got in from_loop.items() for to, ln in got if to not in (k, -1)],
@@ -295,7 +299,8 @@ def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int],
     loops the surface joins: mushroom cut 3:1 (full mode) got two handles from lines under the cap
     to the stem (edge paths 1.4-1.6 times as long as the lines; across a cut tube the paths run
     round the handle). Of the sweep's pairs the rule chose (seeds 1-10, both modes), those whose
-    every line is such a shortcut at SHORTCUT = 2 lie on 24 runs: only that one changed.
+    every line is such a shortcut at SHORTCUT = 2 lie on 24 runs: only that one changed; of the
+    cross and speckle cuts of seeds 1-2, annulus+speckle 2:0 full came right (genus 3, truth 1).
     """
     by_pair: dict[tuple[int, int], list[ForceLine]] = {}
     for ln in chosen:
