@@ -13,8 +13,8 @@ not a closed manifold or lost input faces, rebuilt here from their parameters:
 - annulus 3:0: a fragment touching only other fragments was left out;
 - featuretype 3:0: a bare crease chord from a copy of a vertex to its neighbour (four faces);
 
-and cuts whose handles were lost or spurious (featuretype 4:1, 2:1, 3:0 full, 1:0 full), by the
-tunnel trial's rules."""
+and cuts whose handles were lost or spurious (featuretype 4:1, 2:1, 3:0 full, 1:0 full; mushroom
+3:1, featuretype 3:1 and 4:1 and frep-plate3 8:1 of bench/sweep.py), by the tunnel trial's rules."""
 
 from __future__ import annotations
 
