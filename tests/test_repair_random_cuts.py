@@ -730,12 +730,18 @@ def test_two_lines_one_way_between_holes_far_apart_make_no_handle(monkeypatch):
     0.07) from a hole by the ear to the next hole, whose own lines all cross it, passed the tunnel
     rule as lines one way that all win, and the bunny came back with a handle. The two holes lie
     3.9 and 6.3 of their mean radii apart: lines one way join loops at most ONE_WAY_REACH radii
-    apart (repair_field.tunnel_pairs; a cut through-hole's rims are 1.3-1.7 apart)."""
+    apart (repair_field.tunnel_pairs; a cut through-hole's rims are 1.3-1.7 apart). The two lines
+    also cut across the surface between the holes (its edges join their ends within twice their
+    lengths, repair_field.surface_shortcuts), which now refuses the pair first; the reach rule is
+    checked with that test off."""
     import algorithms.repair_field as rf
     from bench.sweep import make_cut
 
     case = make_cut("bunny", 14, 0)
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=0, mode="full")
+    assert "all along the surface between them: no tunnel" in res.tunnel_note
+    monkeypatch.setattr(rf, "SHORTCUT", 0.0)
     res = closed_repair(model, genus=0, mode="full")
     assert "one way only, too far apart for a tunnel" in res.tunnel_note
     monkeypatch.setattr(rf, "ONE_WAY_REACH", np.inf)
