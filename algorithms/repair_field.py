@@ -146,10 +146,13 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     # lines up to the slab's loop, whose lines to it lost to two along the surface to a hole beside
     # it; the hole was capped (genus 2, truth 3). On seeds 1-10 and the cross and speckle cuts of
     # seeds 1-2 it changed nothing else.
+    # (forced tunnels, "on", take the best connected pair as before: no line is set aside there)
+    between = [ln for k, got in from_loop.items() for to, ln in got if to not in (k, -1)]
+    on = (dict(zip(map(id, between), runs_on_surface(between, model.mesh) | surface_shortcuts(between, model.mesh)))
+          if between and not force else {})  # each line measured once, read by both calls below
     along: list[tuple[int, int]] = []
-    if not ALONG_COMPETES:
-        _, along = _off_surface_pairs([ln for k, got in from_loop.items() for to, ln in got if to not in (k, -1)],
-                                      pos_in, model.mesh)
+    if not ALONG_COMPETES and not force:
+        _, along = _off_surface_pairs(between, pos_in, model.mesh, on=on)
     if along:
         counts = {pair: sum(tuple(sorted((k, to))) == pair for k, got in from_loop.items() for to, _ in got)
                   for pair in along}
@@ -164,7 +167,7 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     notes += [f"loops {a} and {b}: {counts[(a, b)]} lines join them, all along the surface between them: no tunnel"
               for a, b in along]
     if not force and chosen:  # lines that all run along surface that is there: no tunnel
-        chosen, flat = _off_surface_pairs(chosen, pos_in, model.mesh)
+        chosen, flat = _off_surface_pairs(chosen, pos_in, model.mesh, on=on)
         for a, b in flat:
             notes = [n.replace(", a tunnel", ", all along the surface between them: no tunnel")
                      if n.startswith(f"loops {a} and {b}: ") else n for n in notes]
@@ -281,12 +284,12 @@ def _to_polygon(X: NDArray[np.float64], P: NDArray[np.float64], *, block: int = 
     return out
 
 
-def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int],
-                       mesh: Mesh) -> tuple[list[ForceLine], list[tuple[int, int]]]:
+def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int], mesh: Mesh, *,
+                       on: dict[int, bool] | None = None) -> tuple[list[ForceLine], list[tuple[int, int]]]:
     """The chosen tunnel lines without those of pairs of loops whose every line runs on the input
     surface (:func:`runs_on_surface`) or cuts across it (:func:`surface_shortcuts`: the input's edges
     join its ends within SHORTCUT times its length). Returns (lines kept, the pairs (a, b), a < b,
-    left out).
+    left out). ``on``: those flags by ``id`` of each line, measured already (else measured here).
 
     **(choice)**, beyond the spec, for the tunnel rule. A tunnel is surface that is missing between
     two loops: its lines cross the gap where that surface was. Lines that all run along surface that
@@ -306,7 +309,8 @@ def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int],
     for ln in chosen:
         a, b = pos_in.get(int(ln.start_vertex), -1), pos_in.get(int(ln.end_vertex), -1)
         by_pair.setdefault((min(a, b), max(a, b)), []).append(ln)
-    on = dict(zip(map(id, chosen), runs_on_surface(chosen, mesh) | surface_shortcuts(chosen, mesh)))
+    if on is None or any(id(ln) not in on for ln in chosen):
+        on = dict(zip(map(id, chosen), runs_on_surface(chosen, mesh) | surface_shortcuts(chosen, mesh)))
     keep: list[ForceLine] = []
     flat: list[tuple[int, int]] = []
     for pair, lines in by_pair.items():

@@ -765,6 +765,9 @@ def test_lines_across_a_concave_corner_between_two_holes_make_no_handle(monkeypa
     res = closed_repair(model, genus=0, mode="full")
     assert "all along the surface between them: no tunnel" in res.tunnel_note
     assert not any(b.kind == "tunnel" for b in res.bridges) and res.copies_left == 0
+    # --tunnels on joins the best connected pair without the rule's tests, these included
+    forced = repair(model, RepairParams(field=FieldParams(mode="full"), tunnels="on"))
+    assert any(b.kind == "tunnel" for b in forced.bridges)
     monkeypatch.setattr(rf, "SHORTCUT", 0.0)  # the shortcut test off: the handle comes back
     res = repair(model, RepairParams(field=FieldParams(mode="full")))
     assert any(b.kind == "tunnel" for b in res.bridges) and res.copies_left == 1
