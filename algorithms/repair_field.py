@@ -414,12 +414,14 @@ def rim_axis(frame: LoopFrame) -> tuple[NDArray[np.float64], NDArray[np.float64]
 
 
 def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RIM, facing: float = FACING,
-                same_island: bool = True) -> set[tuple[int, int]]:
+                same_island: bool = True, across: float = 0.0) -> set[tuple[int, int]]:
     """Pairs (a, b), a < b, of loops of one island (``same_island``; else of two islands) that are
     the two rims of a tube cut across, each open towards the other: both rims (``rim_axis``:
     mean |n . N| < ``rim``) and facing (the mean of b . u over a loop's points, with b its outward
     vectors (spec §2) and u the unit vector from its centroid to the other's, above ``facing``,
-    both ways), with no other loop of ``frames`` in the gap between them (``_between``).
+    both ways), with no other loop of ``frames`` in the gap between them (``_between``), and, when
+    ``across`` > 0, each loop's plane across the axis between them (|N . u| above ``across``, N the
+    normal of its least-squares plane): the two cut faces of a tube lie across it.
 
     **(choice)** Lines across such a rim's own hole do not count against the lines between the
     two (``tunnel_pairs``): across a rim they meet the tube's wall square on, a cap with a crease
@@ -445,6 +447,7 @@ def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RI
                 continue
             u = u / d
             if float((frames[a].outward @ u).mean()) > facing and float((frames[b].outward @ -u).mean()) > facing \
+                    and min(abs(float(geo[a][1] @ u)), abs(float(geo[b][1] @ u))) >= across \
                     and not _between(frames, geo, a, b):
                 out.add((min(a, b), max(a, b)))
     return out
