@@ -823,3 +823,51 @@ def test_a_tunnel_beaten_only_by_lines_along_the_surface_is_kept_untwisted(monke
     monkeypatch.setattr(rf, "ALONG_COMPETES", True)
     res = repair(model, RepairParams())
     assert topology(res.mesh.faces).genus == 2 and "loops 1 and 2: 9 lines join them, beaten" in res.tunnel_note
+
+
+def test_walks_facing_across_a_knotted_tube_s_missing_section_are_joined(monkeypatch):
+    """bench/sweep.py cut trefoil:10:0: a ball took a section of the knotted tube, and strips of its
+    wall (islands) lie in the gap, bridged to the rims on either side. No line crosses the rest of
+    the gap (6-10 L_c), and the tube came back severed (genus 0, truth 1). After the island bridges
+    the two walks across the gap are rims facing 0.57 and 0.83 (repair._facing_walk_bridges):
+    joined along the tube at WALK_FACING; and the first bridge along it met an island bridge's
+    neighbourhood, so the handle is the first kept one's (keep_along_tube)."""
+    import algorithms.repair as rp
+    from bench.sweep import make_cut
+
+    case = make_cut("trefoil", 10, 0)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=1)
+    assert "facing rims of a tube the island bridges left apart, joined along it" in res.tunnel_note
+    monkeypatch.setattr(rp, "WALK_FACING", 0.6)
+    assert topology(repair(model, RepairParams()).mesh.faces).genus == 0
+
+
+def test_walks_side_by_side_across_a_thin_plate_are_not_a_tube_s_rims(monkeypatch):
+    """bench/sweep.py cut thin-plate:9:1: after the island bridges, two walks on the plate's two
+    sides open towards each other (0.52 / 0.58) across its thickness, but their planes lie along
+    the axis between them (|N . u| 0.08), not across it as a tube's cut faces do. Joined along
+    that axis (WALK_ACROSS = 0) they made a handle through the plate (genus 1, truth 0)."""
+    import algorithms.repair as rp
+    from bench.sweep import make_cut
+
+    case = make_cut("thin-plate", 9, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    closed_repair(model, genus=0)
+    monkeypatch.setattr(rp, "WALK_ACROSS", 0.0)
+    assert topology(repair(model, RepairParams()).mesh.faces).genus == 1
+
+
+def test_a_walk_with_a_strip_of_wall_bridged_to_it_is_still_a_rim(monkeypatch):
+    """bench/sweep.py cut trefoil:1:0 (light mode): one walk across the knotted tube's missing
+    section takes in a strip of wall bridged to the rim; its input vertices have mean |n . N| 0.55,
+    above the loops' rim threshold (0.5), and the tube came back severed (genus 0, 3.7 % off). At
+    WALK_RIM = 0.6 the two walks are joined along the tube: genus 1."""
+    import algorithms.repair as rp
+    from bench.sweep import make_cut
+
+    case = make_cut("trefoil", 1, 0)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    closed_repair(model, genus=1)
+    monkeypatch.setattr(rp, "WALK_RIM", 0.5)
+    assert topology(repair(model, RepairParams()).mesh.faces).genus == 0
