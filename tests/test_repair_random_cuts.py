@@ -871,3 +871,20 @@ def test_a_walk_with_a_strip_of_wall_bridged_to_it_is_still_a_rim(monkeypatch):
     closed_repair(model, genus=1)
     monkeypatch.setattr(rp, "WALK_RIM", 0.5)
     assert topology(repair(model, RepairParams()).mesh.faces).genus == 0
+
+
+def test_a_rim_joined_along_its_tube_takes_no_handle_to_another_hole(monkeypatch):
+    """bench/sweep.py cut trefoil:2:0 in full mode: the knotted tube cut into two islands, one cut a
+    long gap between facing rims (joined along the tube), the other a thin slice whose rims (loops 5
+    and 6) are joined along the tube too. Two island bridges then ran from rim 5 down to a hole on
+    the strand beneath it at the knot's crossing (4 lines, median quality 0.42): a second handle
+    beside the tube's (genus 2, truth 1; 2.9 % off). RIM_ENDS_TAKEN refuses them: genus 1."""
+    import algorithms.repair as rp
+    from bench.sweep import make_cut
+
+    case = make_cut("trefoil", 2, 0)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=1, mode="full")
+    assert any("a rim already joined along its tube" in why for _, why in res.rejected)
+    monkeypatch.setattr(rp, "RIM_ENDS_TAKEN", False)
+    assert topology(repair(model, RepairParams(field=FieldParams(mode="full"))).mesh.faces).genus == 2
