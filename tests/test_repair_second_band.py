@@ -129,16 +129,23 @@ def test_sweep_cuts_crossing_a_torus_and_a_double_torus():
         assert_input_kept(model, res.mesh)
 
 
-def test_lines_beside_a_band_make_no_handle():
+def test_lines_beside_a_band_make_no_handle(monkeypatch):
     """The thin torus crossed by two slabs at a shallow angle (sweep cut thin-torus+cross:1:0): a
     sliver of tube between the slabs meets one piece across one band, and lines beside its bridges,
     in their order, joined two holes. The first run (before any pinch is joined) had genus 4 with
-    the order test alone; genus 1 with the second-band test."""
+    the order test alone; genus 1 with the second-band test. Those lines start at a rim joined
+    along its tube, and the rule that such a rim takes no second handle (repair.RIM_ENDS_TAKEN)
+    now refuses the same five first: the second-band test is checked with it off."""
     import algorithms.repair as rp
     from bench.sweep import cut_named
 
     case = cut_named("thin-torus+cross:1:0")
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
-    res = rp._repair(model, RepairParams(field=FieldParams(mode="light")), join_pinches=False)
+    params = RepairParams(field=FieldParams(mode="light"))
+    res = rp._repair(model, params, join_pinches=False)
     assert topology(res.mesh.faces).genus == 1
-    assert any("not a second band" in why for _, why in res.rejected)
+    assert sum("a rim already joined along its tube" in why for _, why in res.rejected) == 5
+    monkeypatch.setattr(rp, "RIM_ENDS_TAKEN", False)
+    res = rp._repair(model, params, join_pinches=False)
+    assert topology(res.mesh.faces).genus == 1
+    assert sum("not a second band" in why for _, why in res.rejected) == 5
