@@ -1506,7 +1506,7 @@ WALK_ACROSS = 0.5  # _facing_walk_bridges: each walk's plane across the axis bet
 # **(choice)** a rim of a tube across islands, once joined along the tube to the rim it faces, takes
 # no island bridge that would close a handle with another loop: trefoil cut 2:0 (full mode) had two
 # bridges from such a rim to a hole on the strand beneath it at the knot's crossing (4 lines, median
-# quality 0.42 against 0.62 along the tube), a second handle beside the tube's (genus 2, truth 1).
+# quality 0.42; 11 along the tube, best 0.83), a second handle beside the tube's (genus 2, truth 1).
 RIM_ENDS_TAKEN = True
 FACING_WALKS = True  # _facing_walk_bridges on (a switch for measuring the rule against the code without it)
 # **(choice)** of the bridges along a tube between two facing rims of islands, or facing walks

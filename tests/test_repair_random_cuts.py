@@ -825,6 +825,14 @@ def test_a_tunnel_beaten_only_by_lines_along_the_surface_is_kept_untwisted(monke
     assert topology(res.mesh.faces).genus == 2 and "loops 1 and 2: 9 lines join them, beaten" in res.tunnel_note
 
 
+def sweep_model(model: str, seed: int, it: int):
+    """The normalised input of bench/sweep.py's cut MODEL:SEED:IT (its free points included)."""
+    from bench.sweep import make_cut
+
+    case = make_cut(model, seed, it)
+    return normalize(case.vertices, case.faces, extra_points=case.free_points)
+
+
 def test_walks_facing_across_a_knotted_tube_s_missing_section_are_joined(monkeypatch):
     """bench/sweep.py cut trefoil:10:0: a ball took a section of the knotted tube, and strips of its
     wall (islands) lie in the gap, bridged to the rims on either side. No line crosses the rest of
@@ -833,10 +841,8 @@ def test_walks_facing_across_a_knotted_tube_s_missing_section_are_joined(monkeyp
     joined along the tube at WALK_FACING; and the first bridge along it met an island bridge's
     neighbourhood, so the handle is the first kept one's (keep_along_tube)."""
     import algorithms.repair as rp
-    from bench.sweep import make_cut
 
-    case = make_cut("trefoil", 10, 0)
-    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    model = sweep_model("trefoil", 10, 0)
     res = closed_repair(model, genus=1)
     assert "facing rims of a tube the island bridges left apart, joined along it" in res.tunnel_note
     monkeypatch.setattr(rp, "WALK_FACING", 0.6)
@@ -849,10 +855,8 @@ def test_walks_side_by_side_across_a_thin_plate_are_not_a_tube_s_rims(monkeypatc
     the axis between them (|N . u| 0.08), not across it as a tube's cut faces do. Joined along
     that axis (WALK_ACROSS = 0) they made a handle through the plate (genus 1, truth 0)."""
     import algorithms.repair as rp
-    from bench.sweep import make_cut
 
-    case = make_cut("thin-plate", 9, 1)
-    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    model = sweep_model("thin-plate", 9, 1)
     closed_repair(model, genus=0)
     monkeypatch.setattr(rp, "WALK_ACROSS", 0.0)
     assert topology(repair(model, RepairParams()).mesh.faces).genus == 1
@@ -864,10 +868,8 @@ def test_a_walk_with_a_strip_of_wall_bridged_to_it_is_still_a_rim(monkeypatch):
     above the loops' rim threshold (0.5), and the tube came back severed (genus 0, 3.7 % off). At
     WALK_RIM = 0.6 the two walks are joined along the tube: genus 1."""
     import algorithms.repair as rp
-    from bench.sweep import make_cut
 
-    case = make_cut("trefoil", 1, 0)
-    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    model = sweep_model("trefoil", 1, 0)
     closed_repair(model, genus=1)
     monkeypatch.setattr(rp, "WALK_RIM", 0.5)
     assert topology(repair(model, RepairParams()).mesh.faces).genus == 0
@@ -880,10 +882,8 @@ def test_a_rim_joined_along_its_tube_takes_no_handle_to_another_hole(monkeypatch
     the strand beneath it at the knot's crossing (4 lines, median quality 0.42): a second handle
     beside the tube's (genus 2, truth 1; 2.9 % off). RIM_ENDS_TAKEN refuses them: genus 1."""
     import algorithms.repair as rp
-    from bench.sweep import make_cut
 
-    case = make_cut("trefoil", 2, 0)
-    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    model = sweep_model("trefoil", 2, 0)
     res = closed_repair(model, genus=1, mode="full")
     assert any("a rim already joined along its tube" in why for _, why in res.rejected)
     monkeypatch.setattr(rp, "RIM_ENDS_TAKEN", False)
