@@ -1552,10 +1552,11 @@ def _facing_walk_bridges(work: _Work, loops: list[NDArray[np.int64]], bridges: l
         return []
     V, N = work.V(), work.N()
     piece = [guard.find(guard.island_of[next(int(v) for v in h.polygon if int(v) in loop_of)]) for h in walks]
+    on_loops = np.fromiter(loop_of, dtype=np.int64, count=len(loop_of))
     frames = []
     for h, p in zip(walks, piece):
         fr = frame_of(V[list(h.polygon)], N[list(h.polygon)], np.array(h.polygon, dtype=np.int64), island=p)
-        on = np.array([int(v) in loop_of for v in fr.vertices])
+        on = np.isin(fr.vertices, on_loops)  # the walk's input loop vertices (not a bridge's points)
         frames.append(replace(fr, vertices=fr.vertices[on], points=fr.points[on], tangent=fr.tangent[on],
                               normal=fr.normal[on], outward=fr.outward[on], charge=fr.charge[on]))
     out: list[list[Bridge]] = []

@@ -9,7 +9,7 @@ the root in its homology class as far as the greedy construction goes (Erickson 
 a maximum spanning tree of the dual graph on the other edges weighted by the length of the cycle
 each closes, and the 2 g edges left over, each closing one cycle. Rooted near a small spurious
 handle, two of the cycles are short (the handle's two generators); rooted far from it they run
-there and back. The command roots the basis at each loop of the cut in turn (the input vertex
+there and back. The command roots the basis at each loop of the cut in turn (the loop's vertex
 nearest its centre) and prints the cycles' lengths: the loop with the most short cycles is where
 to look. Not part of the test suite's timing; a debugging aid for the sweep's misses, like
 ``bench.explain``.
@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 
-from algorithms.topology import edge_table
+from algorithms.topology import edge_table, face_adjacency
 
 
 @dataclass(frozen=True)
@@ -42,36 +42,31 @@ def homology_cycles(vertices: NDArray[np.float64], faces: NDArray[np.int64], roo
     et = edge_table(F)
     if not np.all(et.counts == 2):
         raise ValueError("homology_cycles needs a closed surface (every edge on two faces)")
-    E = et.edges
+    E, n = et.edges, len(V)
     w = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
-    n = len(V)
     dist, pred = dijkstra(coo_matrix((w, (E[:, 0], E[:, 1])), shape=(n, n)).tocsr(), directed=False,
                           indices=root, return_predecessors=True)
-    used = np.unique(F)
-    if not np.all(np.isfinite(dist[used])):
+    if not np.all(np.isfinite(dist[np.unique(F)])):
         raise ValueError("homology_cycles needs a connected surface")
     child = np.flatnonzero(pred >= 0)
-    tree = {(int(min(a, b)), int(max(a, b))) for a, b in zip(child, pred[child])}
-    in_tree = np.array([(int(a), int(b)) in tree for a, b in E], dtype=bool)
-    sigma = dist[E[:, 0]] + dist[E[:, 1]] + w
-    # the two faces of each edge (half-edge 3 f + k is edge k of face f)
-    order = np.argsort(et.halfedge_edge, kind="stable")
-    sides = (order // 3).reshape(-1, 2)
+    in_tree = np.isin(E[:, 0] * n + E[:, 1],
+                      np.minimum(child, pred[child]) * n + np.maximum(child, pred[child]))
+    sigma = dist[E[:, 0]] + dist[E[:, 1]] + w  # the length of the cycle each edge closes
+    sides = face_adjacency(F)  # closed: one pair of faces per edge, in the edges' order
+    # the dual graph on the edges outside the tree, its maximum spanning tree by sigma: of parallel
+    # dual edges (two faces sharing two edges) only the longest cycle's can be in it
     rest = np.flatnonzero(~in_tree)
-    # maximum spanning tree of the dual graph on the other edges: minimum of (top - sigma) > 0
-    weight = sigma[rest].max() + 1.0 - sigma[rest]
-    dual = coo_matrix((weight, (sides[rest, 0], sides[rest, 1])), shape=(len(F), len(F))).tocsr()
-    cotree = minimum_spanning_tree(dual).tocoo()
-    chosen = {(int(min(a, b)), int(max(a, b))) for a, b in zip(cotree.row, cotree.col)}
-    # parallel dual edges (two faces sharing two edges) collapse in the sparse matrix: keep one
-    out, seen = [], set()
-    for e in rest:
-        key = (int(min(sides[e])), int(max(sides[e])))
-        if key in chosen and key not in seen:
-            seen.add(key)
-            continue
-        out.append(Cycle(float(sigma[e]), (int(E[e, 0]), int(E[e, 1]))))
-    return sorted(out, key=lambda c: c.length)
+    rest = rest[np.argsort(-sigma[rest], kind="stable")]
+    a, b = sides[rest].min(axis=1), sides[rest].max(axis=1)
+    _, first = np.unique(a * len(F) + b, return_index=True)
+    rep = rest[first]
+    weight = sigma[rep].max() + 1.0 - sigma[rep]  # positive, smallest for the longest cycle
+    cotree = minimum_spanning_tree(coo_matrix((weight, (a[first], b[first])), shape=(len(F), len(F))).tocsr())
+    t = cotree.tocoo()
+    in_cotree = rep[np.isin(a[first] * len(F) + b[first], np.minimum(t.row, t.col) * len(F) + np.maximum(t.row, t.col))]
+    gens = np.setdiff1d(rest, in_cotree)
+    gens = gens[np.argsort(sigma[gens], kind="stable")]
+    return [Cycle(float(sigma[e]), (int(E[e, 0]), int(E[e, 1]))) for e in gens]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -97,11 +92,12 @@ def main(argv: list[str] | None = None) -> int:
     if not (t.watertight and t.components == 1):
         print("not one closed piece: no basis")
         return 1
-    n_in = model.mesh.n_vertices
     ks = [int(k) for k in a.loops.split(",")] if a.loops else range(len(frames))
     for k in ks:
-        c = frames[k].points.mean(axis=0)
-        root = int(np.argmin(np.linalg.norm(V[:n_in] - c, axis=1)))
+        # the loop's vertex nearest its centre (input vertices keep their positions in the output)
+        P = frames[k].points
+        p = P[np.argmin(np.linalg.norm(P - P.mean(axis=0), axis=1))]
+        root = int(np.argmin(np.linalg.norm(V - p, axis=1)))
         cycles = homology_cycles(V, F, root)
         print(f"  loop {k} (root vertex {root}): " + ", ".join(f"{cy.length:.3g}" for cy in cycles))
     return 0
