@@ -244,6 +244,7 @@ class GraphState:
     rules: ConflictRules
     kept: list[Bridge] = field(default_factory=list)
     boundary: BoundaryEdges | None = None  # the loops' edges no bridge may run along (None: not tested)
+    reserved: set[int] = field(default_factory=set)  # vertices no bridge may end at (a fragment hangs there)
     _samples: list[NDArray[np.float64]] = field(default_factory=list)
     _tree: cKDTree | None = None  # over the kept bridges' samples, built when first needed after an add
 
@@ -256,6 +257,8 @@ class GraphState:
         near = self.rules.neighbourhood if neighbourhood is None else neighbourhood
         if b.start == b.end:
             return "starts and ends at the same vertex"
+        if b.start in self.reserved or b.end in self.reserved:
+            return "ends where a set-aside fragment hangs"
         la, ia = self.loop_of[b.start]
         lb, ib = self.loop_of[b.end]
         for k in self.kept:

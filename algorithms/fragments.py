@@ -63,6 +63,18 @@ def fragment_faces(model: Icadm) -> list[NDArray[np.int64]]:
     return [f for _, f in _fragments(model)]
 
 
+def hanging_points(model: Icadm) -> list[list[int]]:
+    """The input vertices each set-aside fragment hangs at (those the kept surface uses), one list
+    per fragment; a fragment that touches only other fragments hangs at none."""
+    frags = _fragments(model)
+    if not frags:
+        return []
+    origin = model.vertex_origin if model.vertex_origin is not None else np.arange(model.mesh.n_vertices)
+    used = np.zeros(1 + max(int(np.max(origin)), max(int(f.max()) for _, f in frags)), dtype=bool)
+    used[np.asarray(origin)[model.mesh.faces.ravel()]] = True
+    return [[int(x) for x in np.unique(faces) if used[x]] for _, faces in frags]
+
+
 def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDArray[np.float64],
                      vertices: NDArray[np.float64] | None = None) -> Attached:
     """Walk every set-aside fragment that hangs at vertices of the hole polygons into them.

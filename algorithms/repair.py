@@ -48,7 +48,7 @@ from .creases import (
     hermite,
     passes_near,
 )
-from .fragments import Attached, attach_fragments, fragment_bridge, fragment_faces
+from .fragments import Attached, attach_fragments, fragment_bridge, fragment_faces, hanging_points
 from .holes import HoleVerdict, SimpleHoleTest, best_fit_plane, classify_hole, polygon_frame
 from .mesh import Icadm, Mesh, face_normals
 from .metrics import angle_stats, min_angles, topology
@@ -398,7 +398,27 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
                 kept.append(br)
         return kept
 
-    # 0. pinch runs: where two islands touch (copies of one input vertex on loops of two islands),
+    # loop pairs a kept island bridge (or such a join) joins: the positions of its ends on the two loops
+    joined: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    # 0. fragments hanging at vertices of two loops or more (a triangle left across the gap between
+    #    islands by a cut: attach_fragments walks it in after step 1, where it joins the walks it touches
+    #    like a bridge): counted joined before any bridge, as the pinch runs below, and no bridge ends
+    #    where one hangs (``_fragment_joins``). Pinch runs (0a, below) are judged with them counted.
+    #    **(choice)** Uncounted, trefoil cut by two slabs 1:0 got a second handle: a one-face fragment
+    #    touching two islands at a corner each, and two island bridges joining those islands
+    #    elsewhere and at the fragment's corner, three joins of two islands (a walk that passed two
+    #    bridges in crossed order).
+    frag_ends: set[int] = set()  # the loop vertices fragments hang at: no bridge ends there
+    if FRAGMENT_JOINS:
+        hanging = [h for h in hanging_points(model) if len(h) > 1]
+        frag_ends = {c for h in hanging for x in h for c in copies.get(x, ())}
+        state.reserved |= frag_ends
+        for b in _fragment_joins(hanging, copies, guard.island_of):
+            state.add(b)
+            guard.add(b)
+            joined.setdefault(tuple(sorted((loop_of[b.start][0], loop_of[b.end][0]))),  # type: ignore[arg-type]
+                              []).append(_ends(b, loop_of))
+    # 0a. pinch runs: where two islands touch (copies of one input vertex on loops of two islands),
     #    the copies are joined before any island bridge, so the topology guard and the tunnel rule
     #    count those islands joined there.
     #    **(choice)** Joined after the bridges (as the copies on one island still are), a pinch
@@ -413,8 +433,6 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
     #    out (with them a featuretype slab lost a tunnel: genus 8, truth 9).
     early = [b for b in _pinch_joins(walk_holes(loops, [], []), copies, [])
              if guard.island_of[b.start] != guard.island_of[b.end]] if join_pinches else []
-    # loop pairs a kept island bridge (or such a join) joins: the positions of its ends on the two loops
-    joined: dict[tuple[int, int], list[tuple[int, int]]] = {}
     for b in early:
         keep(b, None)
         guard.add(b)
@@ -509,7 +527,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
         # components no line joined that touch at a vertex: joined there (zero-length bridges)
-        for b in _shared_vertex_joins(copies, guard, {v for k in bridges for v in (k.start, k.end)}):
+        for b in _shared_vertex_joins(copies, guard, {v for k in bridges for v in (k.start, k.end)} | frag_ends):
             keep(b, None)
             notes.append(f"islands {guard.island_of[b.start]} and {guard.island_of[b.end]} joined where they "
                          f"touch (vertex {int(model.vertex_origin[b.start])})")
@@ -521,7 +539,8 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
             # each component in turn as the first: one far from every other (a separate object) is left
             sb = next((x for k in range(len(comps)) if (x := _join_components(
                 work.V(), frames, comps[k:] + comps[:k], lc_used, params.field.ki,
-                {v for b in bridges for v in (b.start, b.end)}, boundary, rules.along)) is not None), None)
+                {v for b in bridges for v in (b.start, b.end)} | frag_ends, boundary, rules.along)) is not None),
+                None)
             if sb is None:
                 notes.append(f"{len(comps)} pieces left apart, each closed on its own: no straight bridge joins "
                              f"them (islands more than {ISLAND_REACH:g} times their holes' width apart are "
@@ -566,7 +585,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
             tunnel_note = tl.note
             wide = params.neighbourhood_factor * (tl.lc or lc_for_rules)
             trial = GraphState(state.vertices, loop_of, state.loop_sizes, replace(rules, neighbourhood=wide),
-                               boundary=boundary)
+                               boundary=boundary, reserved=state.reserved)
             for k in state.kept:
                 trial.add(k)
             # the two bridges of a tunnel join the loops at two places around them: ends closer than
@@ -657,7 +676,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         for j, (idx, b, ln, why) in enumerate(pending):
             if b.start in on_bad and b.end in on_bad and "same neighbourhood" in why:
                 relaxed = GraphState(work.V(), loop_of, state.loop_sizes,
-                                     replace(rules, neighbourhood=0.0), boundary=boundary)
+                                     replace(rules, neighbourhood=0.0), boundary=boundary, reserved=state.reserved)
                 for k in state.kept:
                     relaxed.add(k)
                 if relaxed.conflict(b) is None:
@@ -1227,6 +1246,32 @@ TUNNEL_CROSSED = "meets the two loops across the tunnel's other bridges (crossed
 AT_A_PINCH = "ends at a point where the input joins its two loops (a pinch): the pinch joins them there"
 
 
+def _fragment_joins(hanging: list[list[int]], copies: dict[int, list[int]], island_of: dict[int, int]
+                    ) -> list[Bridge]:
+    """Zero-length stand-ins for the fragments that hang at two loop vertices or more
+    (:func:`algorithms.fragments.hanging_points`, input vertices): what the guard and the conflict
+    rules count of them. A point with several copies on the loops is left out (which copy the
+    fragment joins is decided by its walk, attach_fragments).
+
+    The walking rule takes one bridge per vertex, so each point is the end of one stand-in at most:
+    pairs of points on different islands first (the joins of islands), then on one island. A
+    fragment at three points, two on one loop, is one stand-in across the islands (frep-perturbed
+    cut 7:1: a chain of two through the middle point broke the guard's walks there, and every island
+    line across the gap the fragment spans was refused as a handle; the surface came back with one,
+    genus 1)."""
+    out = []
+    for points in hanging:
+        at = [copies[x][0] for x in points if len(copies.get(x, ())) == 1]
+        pairs = sorted(((a, b) for k, a in enumerate(at) for b in at[k + 1:]),
+                       key=lambda p: island_of[p[0]] == island_of[p[1]])
+        used: set[int] = set()
+        for a, b in pairs:
+            if not used & {a, b}:
+                used |= {a, b}
+                out.append(Bridge(a, b, np.zeros((0, 3)), 0.0, "pinch"))
+    return out
+
+
 def _loop_groups(joins: list[Bridge], loop_of: dict[int, tuple[int, int]]) -> dict[int, int]:
     """loop -> a label shared by the loops that ``joins`` join (connected components), for the loops
     of joins between two different loops only."""
@@ -1508,6 +1553,7 @@ WALK_ACROSS = 0.5  # _facing_walk_bridges: each walk's plane across the axis bet
 # bridges from such a rim to a hole on the strand beneath it at the knot's crossing (4 lines, median
 # quality 0.42; 11 along the tube, best 0.83), a second handle beside the tube's (genus 2, truth 1).
 RIM_ENDS_TAKEN = True
+FRAGMENT_JOINS = True  # _fragment_joins counted before the bridges (a switch for measuring)
 FACING_WALKS = True  # _facing_walk_bridges on (a switch for measuring the rule against the code without it)
 # **(choice)** of the bridges along a tube between two facing rims of islands, or facing walks
 # (step 1), only the first may join two holes of one surface: across an empty gap the next ones split the hole the first

@@ -76,3 +76,66 @@ def test_the_walk_is_not_cut_around_a_fragment_at_the_end_of_a_chain():
     assert _pinch(walk, marks) == (2, 5)  # without the fragments' vertex sets: cut (the old rule)
     across = (0, 1, 5, 6, 2, 3, 5, 7)  # each side holds border vertices: a chain across the hole
     assert _pinch(across, marks, [{5, 6, 7}]) == (2, 6)
+
+
+def test_a_fragment_across_a_hole_is_a_join_the_guard_counts():
+    """The torus's fragment hangs at two vertices of one loop (its third is loose): one stand-in
+    join between exactly those two loop vertices (repair._fragment_joins), which the topology guard
+    counts as splitting that loop's walk, not as a handle."""
+    from algorithms.boundary import summarize
+    from algorithms.bridge_graph import TopologyGuard
+    from algorithms.fragments import hanging_points
+    from algorithms.repair import _fragment_joins
+
+    model = normalize(*(lambda m: (m.vertices, m.faces))(_torus_case().incomplete))
+    face = next(s for s in model.set_aside if s.reason.startswith("fragment"))
+    loops = [f.vertices for f in summarize(model).loops]
+    on_loops = {int(v) for lp in loops for v in lp}
+    (points,) = hanging_points(model)
+    assert sorted(points) == sorted(v for v in face.vertices if v in on_loops) and len(points) == 2
+    copies = {int(model.vertex_origin[v]): [v] for v in on_loops}
+    guard = TopologyGuard(loops, [f.island for f in summarize(model).loops])
+    (b,) = _fragment_joins([points], copies, guard.island_of)
+    assert {b.start, b.end} == set(points) and len(b.points) == 0
+    assert guard.effect(b.start, b.end) == "split"
+    # a point with two copies on the loops is left out: no join from one point
+    assert _fragment_joins([points], {points[0]: [points[0], 10**6], points[1]: [points[1]]}, guard.island_of) == []
+
+
+def test_a_fragment_at_three_points_is_one_join_per_point_across_islands_first():
+    """The walking rule takes one bridge per vertex: a fragment hanging at points 1, 2 (island 0)
+    and 3 (island 1) is one stand-in across the islands (the first such pair, 1-3), never a chain
+    1-2, 2-3 through the middle point; at two points of one island, one stand-in; at four points on
+    two islands, two stand-ins across them that share no point."""
+    from algorithms.repair import _fragment_joins
+
+    island = {1: 0, 2: 0, 3: 1, 4: 1, 5: 2}
+    copies = {v: [v] for v in island}
+    ends = lambda hanging: [(b.start, b.end) for b in _fragment_joins(hanging, copies, island)]  # noqa: E731
+    assert ends([[1, 2, 3]]) == [(1, 3)]
+    assert ends([[1, 2]]) == [(1, 2)]
+    assert ends([[1, 2, 3, 4]]) == [(1, 3), (2, 4)]
+    assert ends([[1, 2], [3, 5]]) == [(1, 2), (3, 5)]  # each fragment on its own
+
+
+def test_a_fragment_between_two_islands_joins_them_before_the_bridges(monkeypatch):
+    """bench/sweep.py cut trefoil+cross:1:0 (two slabs through the knot): input face 6860 is left
+    hanging at a corner of each of two islands (vertices 2910 and 2911). Walked in after the island
+    bridges, it joined them a third time beside two island bridges (one ending at its corner 2910),
+    and the walk around the three passed two bridges in crossed order: a second handle (genus 2,
+    truth 1). Counted as their join before the bridges (repair.FRAGMENT_JOINS), genus 1."""
+    import algorithms.repair as rp
+    from bench.sweep import make_cut
+
+    case = make_cut("trefoil", 1, 0, "cross")
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    assert any(s.face == 6860 and set(s.vertices) >= {2910, 2911} for s in model.set_aside)
+    for mode in ("light", "full"):
+        res = repair(model, RepairParams(field=FieldParams(mode=mode)))
+        t = topology(res.mesh.faces)
+        assert t.watertight and t.components == 1 and t.genus == 1
+        assert 6860 in res.attached.input_faces
+        assert_input_kept(model, res.mesh, fragments=True)
+        assert not any({b.start, b.end} & {2910, 2911} for b in res.bridges if b.kind == "island")
+    monkeypatch.setattr(rp, "FRAGMENT_JOINS", False)
+    assert topology(repair(model, RepairParams()).mesh.faces).genus == 2
