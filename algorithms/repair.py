@@ -466,10 +466,13 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         best: dict[int, float] = {}
         for key, m in med.items():
             for lp in key:
-                best[lp] = max(best.get(lp, 0.0), m)
+                best[lp] = max(best.get(lp, 0.0), m if key not in joined or not JOINED_NO_BAR else 0.0)
         # (of each loop: max of the two bests; with min, a loop that only this pair reaches passed
         # trivially, and a cylinder cut by a slab and a ball at its rim grew a handle from the
-        # ball's hole to the far side of the slab, median 0.017 beside the band's 0.104)
+        # ball's hole to the far side of the slab, median 0.017 beside the band's 0.104.)
+        # Lines between two loops the input joins already (a fragment, a pinch: ``joined`` so far)
+        # join nothing new and set no bar (annulus cut 6:0: two lines to a four-vertex island a
+        # fragment joins, median 0.16, beside the band of 20 lines, 0.067, that closes the handle).
         handle_pairs = {key for key, qs in by_pair.items()
                         if len(qs) >= 3 and med[key] >= 0.5 * max(best[key[0]], best[key[1]])}
         # where each loop's lines reach other loops: (position, other loop), for _second_band
@@ -1554,6 +1557,7 @@ WALK_ACROSS = 0.5  # _facing_walk_bridges: each walk's plane across the axis bet
 # quality 0.42; 11 along the tube, best 0.83), a second handle beside the tube's (genus 2, truth 1).
 RIM_ENDS_TAKEN = True
 FRAGMENT_JOINS = True  # _fragment_joins counted before the bridges (a switch for measuring)
+JOINED_NO_BAR = True  # lines between loops joined before the bridges set no handle bar (a switch for measuring)
 FACING_WALKS = True  # _facing_walk_bridges on (a switch for measuring the rule against the code without it)
 # **(choice)** of the bridges along a tube between two facing rims of islands, or facing walks
 # (step 1), only the first may join two holes of one surface: across an empty gap the next ones split the hole the first

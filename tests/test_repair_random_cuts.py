@@ -911,3 +911,16 @@ def test_a_rim_joined_along_its_tube_takes_no_handle_to_another_hole(monkeypatch
     monkeypatch.setattr(rp, "RIM_ENDS_TAKEN", False)
     assert topology(repair(model, RepairParams(field=FieldParams(mode="full"))).mesh.faces).genus == 2
 
+
+def test_lines_between_loops_a_fragment_joins_set_no_bar_for_a_handle(monkeypatch):
+    """bench/sweep.py cut annulus:6:0: the ring cut in two places into two islands. At one cut a
+    fragment joins them (counted before the bridges, repair.FRAGMENT_JOINS), so the band of 20 lines
+    across the other cut (median quality 0.067) closes the handle. Its loop's best pair was two
+    lines (0.16) to a four-vertex island the fragment joins to it too: with those setting the bar
+    (half the best), the band was refused and the ring came back severed (genus 0, 8.6 % off)."""
+    import algorithms.repair as rp
+
+    model = sweep_model("annulus", 6, 0)
+    closed_repair(model, genus=1)
+    monkeypatch.setattr(rp, "JOINED_NO_BAR", False)
+    assert topology(repair(model, RepairParams()).mesh.faces).genus == 0
