@@ -87,14 +87,16 @@ def test_a_fragment_across_a_hole_is_a_join_the_guard_counts():
     from algorithms.fragments import hanging_points
     from algorithms.repair import _fragment_joins
 
-    model = normalize(*(lambda m: (m.vertices, m.faces))(_torus_case().incomplete))
+    cut_torus = _torus_case().incomplete
+    model = normalize(cut_torus.vertices, cut_torus.faces)
     face = next(s for s in model.set_aside if s.reason.startswith("fragment"))
-    loops = [f.vertices for f in summarize(model).loops]
+    frames = summarize(model).loops
+    loops = [f.vertices for f in frames]
     on_loops = {int(v) for lp in loops for v in lp}
     (points,) = hanging_points(model)
     assert sorted(points) == sorted(v for v in face.vertices if v in on_loops) and len(points) == 2
     copies = {int(model.vertex_origin[v]): [v] for v in on_loops}
-    guard = TopologyGuard(loops, [f.island for f in summarize(model).loops])
+    guard = TopologyGuard(loops, [f.island for f in frames])
     (b,) = _fragment_joins([points], copies, guard.island_of)
     assert {b.start, b.end} == set(points) and len(b.points) == 0
     assert guard.effect(b.start, b.end) == "split"
