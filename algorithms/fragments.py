@@ -50,10 +50,11 @@ class Attached:
 
 def _fragments(model: Icadm) -> list[tuple[list[int], NDArray[np.int64]]]:
     """The set-aside fragments, each as (input face ids, faces over input vertices)."""
-    ids = [s.face for s in model.set_aside if s.reason.startswith("fragment")]
-    if not ids:
+    rows = [s for s in model.set_aside if s.reason.startswith("fragment")]
+    if not rows:
         return []
-    faces = np.array([next(s.vertices for s in model.set_aside if s.face == i) for i in ids], dtype=np.int64)
+    ids = [s.face for s in rows]
+    faces = np.array([s.vertices for s in rows], dtype=np.int64)
     n, lab = islands(faces)
     return [([ids[k] for k in np.flatnonzero(lab == i)], faces[lab == i]) for i in range(n)]
 
@@ -63,15 +64,22 @@ def fragment_faces(model: Icadm) -> list[NDArray[np.int64]]:
     return [f for _, f in _fragments(model)]
 
 
+def _on_surface(model: Icadm, size: int) -> NDArray[np.bool_]:
+    """(size,) True at the input vertices the kept surface uses (the model's faces, through
+    ``vertex_origin``): where a fragment can hang."""
+    origin = model.vertex_origin if model.vertex_origin is not None else np.arange(model.mesh.n_vertices)
+    used = np.zeros(size, dtype=bool)
+    used[np.asarray(origin)[model.mesh.faces.ravel()]] = True
+    return used
+
+
 def hanging_points(model: Icadm) -> list[list[int]]:
     """The input vertices each set-aside fragment hangs at (those the kept surface uses), one list
     per fragment; a fragment that touches only other fragments hangs at none."""
     frags = _fragments(model)
     if not frags:
         return []
-    origin = model.vertex_origin if model.vertex_origin is not None else np.arange(model.mesh.n_vertices)
-    used = np.zeros(1 + max(int(np.max(origin)), max(int(f.max()) for _, f in frags)), dtype=bool)
-    used[np.asarray(origin)[model.mesh.faces.ravel()]] = True
+    used = _on_surface(model, 1 + max(model.mesh.n_vertices, max(int(f.max()) for _, f in frags)))
     return [[int(x) for x in np.unique(faces) if used[x]] for _, faces in frags]
 
 
@@ -104,8 +112,7 @@ def attach_fragments(model: Icadm, polygons: list[tuple[int, ...]], normals: NDA
         return Attached(polys, np.zeros((0, 3), dtype=np.int64), source=tuple(range(len(polys))))
     V = model.mesh.vertices if vertices is None else vertices
     origin = model.vertex_origin if model.vertex_origin is not None else np.arange(model.mesh.n_vertices)
-    used = np.zeros(len(V), dtype=bool)
-    used[np.asarray(origin)[model.mesh.faces.ravel()]] = True
+    used = _on_surface(model, len(V))
 
     def occurrences() -> dict[int, list[tuple[int, int]]]:
         """input vertex -> (polygon, vertex) of each occurrence in the polygons as they are now"""

@@ -400,6 +400,11 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
 
     # loop pairs a kept island bridge (or such a join) joins: the positions of its ends on the two loops
     joined: dict[tuple[int, int], list[tuple[int, int]]] = {}
+
+    def mark_joined(b: Bridge) -> None:
+        joined.setdefault(tuple(sorted((loop_of[b.start][0], loop_of[b.end][0]))),  # type: ignore[arg-type]
+                          []).append(_ends(b, loop_of))
+
     # 0. fragments hanging at vertices of two loops or more (a triangle left across the gap between
     #    islands by a cut: attach_fragments walks it in after step 1, where it joins the walks it touches
     #    like a bridge): counted joined before any bridge, as the pinch runs below, and no bridge ends
@@ -408,16 +413,13 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
     #    touching two islands at a corner each, and two island bridges joining those islands
     #    elsewhere and at the fragment's corner, three joins of two islands (a walk that passed two
     #    bridges in crossed order).
-    frag_ends: set[int] = set()  # the loop vertices fragments hang at: no bridge ends there
     if FRAGMENT_JOINS:
         hanging = [h for h in hanging_points(model) if len(h) > 1]
-        frag_ends = {c for h in hanging for x in h for c in copies.get(x, ())}
-        state.reserved |= frag_ends
+        state.reserved |= {c for h in hanging for x in h for c in copies.get(x, ())}  # no bridge ends there
         for b in _fragment_joins(hanging, copies, guard.island_of):
             state.add(b)
             guard.add(b)
-            joined.setdefault(tuple(sorted((loop_of[b.start][0], loop_of[b.end][0]))),  # type: ignore[arg-type]
-                              []).append(_ends(b, loop_of))
+            mark_joined(b)
     # 0a. pinch runs: where two islands touch (copies of one input vertex on loops of two islands),
     #    the copies are joined before any island bridge, so the topology guard and the tunnel rule
     #    count those islands joined there.
@@ -436,8 +438,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
     for b in early:
         keep(b, None)
         guard.add(b)
-        joined.setdefault(tuple(sorted((loop_of[b.start][0], loop_of[b.end][0]))),  # type: ignore[arg-type]
-                          []).append(_ends(b, loop_of))
+        mark_joined(b)
 
     # 1. connect islands (ICM3 -> ICM2): conflicts resolved best quality first
     t0 = time.perf_counter()
@@ -525,12 +526,12 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
             if why is None:
                 keep(b, ln)
                 guard.add(b)
-                joined.setdefault(pair, []).append(_ends(b, loop_of))  # type: ignore[arg-type]
+                mark_joined(b)
             else:
                 rejected.append((b.candidate, why))
                 pending.append((b.candidate, b, ln, why))
         # components no line joined that touch at a vertex: joined there (zero-length bridges)
-        for b in _shared_vertex_joins(copies, guard, {v for k in bridges for v in (k.start, k.end)} | frag_ends):
+        for b in _shared_vertex_joins(copies, guard, {v for k in bridges for v in (k.start, k.end)} | state.reserved):
             keep(b, None)
             notes.append(f"islands {guard.island_of[b.start]} and {guard.island_of[b.end]} joined where they "
                          f"touch (vertex {int(model.vertex_origin[b.start])})")
@@ -542,7 +543,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
             # each component in turn as the first: one far from every other (a separate object) is left
             sb = next((x for k in range(len(comps)) if (x := _join_components(
                 work.V(), frames, comps[k:] + comps[:k], lc_used, params.field.ki,
-                {v for b in bridges for v in (b.start, b.end)} | frag_ends, boundary, rules.along)) is not None),
+                {v for b in bridges for v in (b.start, b.end)} | state.reserved, boundary, rules.along)) is not None),
                 None)
             if sb is None:
                 notes.append(f"{len(comps)} pieces left apart, each closed on its own: no straight bridge joins "
