@@ -1,7 +1,7 @@
 """Random-cut sweep: the repair on many cuts it was not tuned on, beside MeshLib's bridge fill.
 
     python -m bench.sweep [--seeds 1-10] [--per-seed 2] [--models a,b] [--modes light,full]
-                          [--styles balls,cross,speckle] [--peers meshlib] [--only MODEL[+STYLE]:SEED:IT]
+                          [--styles balls,cross,speckle,patches] [--peers meshlib] [--only MODEL[+STYLE]:SEED:IT]
                           [--save DIR] [--out F.jsonl] [--write]
 
 The bench cases (bench/cases.py) are fixed; this makes new ones "the same way" (balls of faces
@@ -11,8 +11,8 @@ method: topology right (watertight, one component, the model's genus), the share
 kept, Hausdorff distance to the model (fraction of its diagonal), the unforced min patch angle and
 the wall time (scored as bench/repair.py scores). A cut is named MODEL:SEED:IT; ``--only`` re-runs
 one, ``--save`` writes it (vertices, faces, free points, truth) as an .npz for debugging. Other cut
-styles (``--styles``, :func:`make_cut`): crossing slabs and faces removed at random, the kinds of
-cut the rules were not made on (MODEL+cross:SEED:IT, MODEL+speckle:SEED:IT).
+styles (``--styles``, :func:`make_cut`): crossing slabs, faces removed at random and geodesic patches, the kinds of
+cut the rules were not made on (MODEL+cross:SEED:IT, MODEL+speckle:SEED:IT, MODEL+patches:SEED:IT).
 
 Not part of the test suite (minutes per seed); compare two runs' --out files with --compare.
 """
@@ -26,6 +26,9 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 
 import bench.repair as bench_repair
 from algorithms import cases as gen
@@ -169,7 +172,21 @@ MODELS = {
 }
 
 
-STYLES = ("balls", "cross", "speckle")  # how make_cut removes faces (the name of a cut not by balls says it)
+STYLES = ("balls", "cross", "speckle", "patches")  # how make_cut removes faces (a cut not by balls is named so)
+
+
+def geodesic_patch(mesh: Mesh, seed: int, radius: float) -> NDArray[np.bool_]:
+    """Faces whose centroid lies within ``radius`` of vertex ``seed`` measured over the surface
+    (shortest paths along the edges, then on to the centroid): a hole that stays on its side of a
+    thin wall, as a scanner's occlusion does, where a ball takes both sides."""
+    V, F = mesh.vertices, mesh.faces
+    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
+    g = coo_matrix((w, (e[:, 0], e[:, 1])), shape=(len(V), len(V))).tocsr()
+    d = dijkstra(g, directed=False, indices=seed, limit=2 * radius)
+    c = gen.face_centroids(mesh)
+    to_c = d[F] + np.linalg.norm(V[F] - c[:, None], axis=2)  # through each corner to the centroid
+    return to_c.min(axis=1) < radius
 
 
 def make_cut(model: str, seed: int, it: int, style: str = "balls") -> BenchCase:
@@ -180,8 +197,10 @@ def make_cut(model: str, seed: int, it: int, style: str = "balls") -> BenchCase:
     ``cross`` (MODEL+cross:SEED:IT): two slabs (width 1.5-3 %) through a point near the model's
     centre, at random normals at least 45 degrees apart: islands, and necks cut through.
     ``speckle`` (MODEL+speckle:SEED:IT): 2-8 % of the faces removed at random: many small holes,
-    vertices where holes touch. 100 free points on the removed part with probability 1/2 (none
-    for speckle)."""
+    vertices where holes touch. ``patches`` (MODEL+patches:SEED:IT): 1-5 geodesic disks (radius
+    4-15 % of the diagonal, measured over the surface) at random vertices: holes that stay on one
+    side of a thin wall, merge where they overlap and can wrap a thin tube or a handle. 100 free
+    points on the removed part with probability 1/2 (none for speckle)."""
     if style not in STYLES:
         raise ValueError(f"unknown cut style {style!r}: one of {', '.join(STYLES)}")
     truth = _model(model)
@@ -207,6 +226,10 @@ def make_cut(model: str, seed: int, it: int, style: str = "balls") -> BenchCase:
             n2 = rng.normal(size=3)
         for n in (n1, n2):
             rm |= slab(truth, n, float(centre @ n / np.linalg.norm(n)), rng.uniform(0.015, 0.03) * d)
+        fp = 100 if rng.random() < 0.5 else 0
+    elif style == "patches":
+        for _ in range(rng.integers(1, 6)):
+            rm |= geodesic_patch(truth, int(rng.integers(truth.n_vertices)), rng.uniform(0.04, 0.15) * d)
         fp = 100 if rng.random() < 0.5 else 0
     else:
         rm = rng.random(truth.n_faces) < rng.uniform(0.02, 0.08)
@@ -316,7 +339,8 @@ def markdown(rows: list[dict], command: str) -> str:
         "time also a slab (width 1.5-3 %), half of the time with 100 free points sampled on the removed "
         "part; cuts named MODEL:SEED:IT (`--only` re-runs one; with `--styles cross,speckle` also two "
         "slabs crossing near the model's centre, MODEL+cross, and 2-8 % of the faces at random, "
-        "MODEL+speckle). No bench case is among them and none was "
+        "MODEL+speckle; with `--styles patches` 1-5 disks grown over the surface, MODEL+patches). "
+        "No bench case is among them and none was "
         "looked at while the rules were made, except the ones the tests name (tests/test_repair_random_cuts.py, "
         "test_repair_sheets.py, test_repair_rims.py), the thin-plate cuts the sheet rule was made on "
         "(repair_field.through_sheet), the turned-part cuts the rim rules were traced on (darning/sheets.py, "
