@@ -17,7 +17,9 @@ exactly the two opposite the edge), which keeps the surface's topology as writte
 arc of a surface is a homeomorphism. A face of the input is never removed (a collapsed edge has a
 new vertex at one end at least, so its two faces are patch faces) and never moves (its copy is
 renamed to the kept vertex at the same position). The patch faces that met the collapsed vertices
-now meet ``k``; the refinement that follows evens them out.
+now meet ``k``; the refinement that follows evens them out. Two copies with a neighbour in
+common (a patch from one copy's fan to a vertex of the other's) fail the link condition whatever
+the path; the patch edge to that neighbour is flipped or split first (:func:`_unshared`).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ COINCIDENT = 1e-6
 # sweep's cuts are two or three edges apart through their patches); a longer path would drag a
 # patch's faces far across to the kept vertex
 MAX_PATH = 6
+UNSHARE = True  # _unshared before giving a copy up (a switch for measuring)
 
 
 @dataclass(frozen=True)
@@ -48,13 +51,15 @@ class Joined:
     """vertices, faces: after the joins (the input's rows first, in their order); joined: copies
     joined into their kept vertex; moved: new vertices that lay on another vertex and could not be
     joined to it, moved off it; left: copies of input vertices that could not be joined (they stay
-    separate vertices at the kept one's position)."""
+    separate vertices at the kept one's position); parted: of the joined, those that had to be
+    parted from neighbours in common first (:func:`_unshared`)."""
 
     vertices: NDArray[np.float64]
     faces: NDArray[np.int64]
     joined: int
     moved: int
     left: int
+    parted: int = 0
 
 
 def close_clusters(points: NDArray[np.float64], radius: float) -> NDArray[np.int64]:
@@ -251,6 +256,109 @@ def _through_faces(star: _Star, c: int, keep: int, n_fixed_faces: int, limit: in
     return _contract(trial, [c, *reversed(mids), keep], keep, n_fixed_faces)
 
 
+def _flip(star: _Star, V: NDArray[np.float64], u: int, w: int, n_fixed_faces: int) -> bool:
+    """Flip the edge (u, w) in place if both its faces are patch faces (not among the first
+    ``n_fixed_faces``), the other diagonal is no edge yet and the two new faces keep the side the
+    old pair faced (each new normal within 90 degrees of the old pair's summed normal)."""
+    both = [i for i in star.at.get(u, ()) if w in star.rows[i]]
+    if len(both) != 2 or min(both) < n_fixed_faces:
+        return False
+    i, j = both
+    ri, rj = star.rows[i], star.rows[j]
+    k = ri.index(u)
+    if ri[(k + 1) % 3] != w:  # face i runs u -> w
+        i, j, ri, rj = j, i, rj, ri
+        k = ri.index(u)
+        if ri[(k + 1) % 3] != w:
+            return False  # inconsistent orientation across the edge
+    x = ri[(k + 2) % 3]
+    y = next(v for v in rj if v not in (u, w))
+    if x == y or y in star.neighbours(x):
+        return False
+
+    def normal(r: list[int]) -> NDArray[np.float64]:
+        return np.cross(V[r[1]] - V[r[0]], V[r[2]] - V[r[0]])
+
+    before = normal(ri) + normal(rj)
+    a, b = [u, y, x], [y, w, x]  # the quad u, y, w, x split along y - x, in the old faces' order
+    if normal(a) @ before <= 0 or normal(b) @ before <= 0:
+        return False
+    star.rows[i], star.rows[j] = a, b
+    star.at[w].discard(i)
+    star.at[y].add(i)
+    star.at[u].discard(j)
+    star.at[x].add(j)
+    return True
+
+
+def _split(star: _Star, u: int, w: int, m: int, n_fixed_faces: int) -> bool:
+    """Split the edge (u, w) in place at a new vertex ``m`` if both its faces are patch faces: each
+    of the two faces becomes two, and u and w are no longer next to each other."""
+    both = [i for i in star.at.get(u, ()) if w in star.rows[i]]
+    if len(both) != 2 or min(both) < n_fixed_faces:
+        return False
+    i, j = both
+    ri = star.rows[i]
+    if ri[(ri.index(u) + 1) % 3] != w:  # face i runs u -> w
+        i, j = j, i
+    ri, rj = star.rows[i], star.rows[j]
+    if rj[(rj.index(w) + 1) % 3] != u:
+        return False  # inconsistent orientation across the edge
+    x = next(v for v in ri if v not in (u, w))
+    y = next(v for v in rj if v not in (u, w))
+    n = len(star.rows)
+    star.rows[i], star.rows[j] = [u, m, x], [w, m, y]
+    star.rows += [[m, w, x], [m, u, y]]
+    star.at[w] = (star.at[w] - {i}) | {n}
+    star.at[u] = (star.at[u] - {j}) | {n + 1}
+    star.at[x].add(n)
+    star.at[y].add(n + 1)
+    star.at[m] = {i, j, n, n + 1}
+    return True
+
+
+def _unshared(star: _Star, V: NDArray[np.float64], c: int, keep: int, new: NDArray[np.bool_], n_fixed_faces: int
+              ) -> tuple[_Star, NDArray[np.float64]] | None:
+    """A copy of ``star`` in which no old vertex is next to both ``c`` and ``keep``, with the
+    positions of the vertices it adds (numbered from ``len(V)``), or None if there is no such
+    vertex or one cannot be parted from them. A patch that ran from one copy's fan to a vertex of
+    the other's gives the two a neighbour in common, and joined, that edge would have four faces
+    (mushroom sweep cut 15:1: patch faces from each of two copies to a vertex of the other's input
+    fan, one of the two edges between two patch faces). The edge from the copy (or the kept
+    vertex) to that neighbour is flipped (:func:`_flip`) where the flip folds nothing, split
+    (:func:`_split`) otherwise, its new vertex a quarter of the way from the edge's middle to the
+    middle of the two vertices opposite it, inside the patch."""
+    shared = [s for s in sorted(star.neighbours(c) & star.neighbours(keep)) if s >= len(new) or not new[s]]
+    if not shared:
+        return None
+    trial = _copy(star)
+    pos = V  # with the vertices added so far
+    for s in shared:
+        if any(_flip(trial, pos, x, s, n_fixed_faces) for x in (c, keep)):
+            continue
+        for x in (c, keep):
+            opposite = [v for i in trial.at.get(x, ()) if s in trial.rows[i] for v in trial.rows[i] if v not in (x, s)]
+            if _split(trial, x, s, len(pos), n_fixed_faces):
+                mid = (pos[x] + pos[s]) / 2
+                pos = np.vstack([pos, mid + 0.25 * (pos[opposite].mean(axis=0) - mid)])
+                break
+        else:
+            return None
+    return trial, pos[len(V):]
+
+
+def _join(star: _Star, c: int, keep: int, new: NDArray[np.bool_], n_fixed_faces: int, max_path: int
+          ) -> _Star | None:
+    """``star`` with ``c`` joined into ``keep``: along a path of new vertices (:func:`_contract`), or
+    through the patch faces between them (:func:`_through_faces`); None if neither can."""
+    for path in _paths(star, c, keep, new, max_path):
+        got = _contract(star, path, keep, n_fixed_faces)
+        if got is not None:
+            return got
+    # no path of new vertices: make one through the patch faces between them
+    return _through_faces(star, c, keep, n_fixed_faces, max_path)
+
+
 def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed: int, n_fixed_faces: int, *,
                 held: NDArray[np.int64] | None = None, max_path: int = MAX_PATH) -> Joined:
     """Join every group of vertices at one position (:func:`coincident_groups`) into its smallest
@@ -258,8 +366,11 @@ def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed
     docstring). A join is kept only if every vertex it touched has one fan afterwards; otherwise
     the copy stays as it was (a new vertex is moved off the point, halfway to the mean of its
     neighbours), and so it does if a join would remove one of the first
-    ``n_fixed_faces`` faces (the input's). Faces are returned in their order with the removed ones
-    left out. ``held``: new vertices that must stay (crease chains) and so are on no contracted path."""
+    ``n_fixed_faces`` faces (the input's). Copies that no join reaches because they have neighbours
+    in common are parted from those first (:func:`_unshared`: patch edges flipped or split; the
+    vertices a split adds are appended to the vertices returned). Faces are returned in their order
+    with the removed ones left out. ``held``: new vertices that must stay (crease chains) and so are
+    on no contracted path."""
     F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     groups = coincident_groups(vertices, F)
     V = np.array(vertices, dtype=np.float64, copy=True)
@@ -271,7 +382,7 @@ def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed
     if held is not None:
         new[np.asarray(held, dtype=np.int64)] = False
     star = _Star(F)
-    joined = left = 0
+    joined = left = parted = 0
     moved = 0
     for g in groups:  # sequential: each join changes the stars the next one walks
         keep = int(g[0])
@@ -281,13 +392,15 @@ def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed
             if not new[c] and not np.array_equal(V[c], V[keep]):
                 left += 1  # two input vertices almost at one point: joined, an input face would move
                 continue
-            got = None
-            for path in _paths(star, c, keep, new, max_path):
-                got = _contract(star, path, keep, n_fixed_faces)
-                if got is not None:
-                    break
-            if got is None:  # no path of new vertices: make one through the patch faces between them
-                got = _through_faces(star, c, keep, n_fixed_faces, max_path)
+            got = _join(star, c, keep, new, n_fixed_faces, max_path)
+            if got is None and UNSHARE:  # neighbours in common: parted from one of the two first
+                un = _unshared(star, V, c, keep, new, n_fixed_faces)
+                if un is not None:
+                    n_new = np.ones(len(un[1]), dtype=bool)
+                    got = _join(un[0], c, keep, np.concatenate([new, n_new]), n_fixed_faces, max_path)
+                    if got is not None:
+                        V, new = np.vstack([V, un[1]]), np.concatenate([new, n_new])
+                        parted += 1
             if got is not None:
                 star = got
                 joined += 1
@@ -301,4 +414,4 @@ def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed
             else:
                 left += 1
     rows = [r for r in star.rows if r is not None]
-    return Joined(V, np.asarray(rows, dtype=np.int64).reshape(-1, 3), joined, moved, left)
+    return Joined(V, np.asarray(rows, dtype=np.int64).reshape(-1, 3), joined, moved, left, parted)

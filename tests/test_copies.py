@@ -247,3 +247,55 @@ def test_copies_on_one_hole_that_a_crease_would_part_are_joined_first(mode):
     P = res.model.mesh.vertices  # the bridges' ends are the model's vertices
     along = [b for b in res.bridges if b.kind == "crease" and np.allclose(P[[b.start, b.end]][:, [0, 2]], [-2.5, 0])]
     assert along and all(len(b.points) == 0 for b in along)
+
+
+
+def test_a_patch_edge_is_flipped_where_that_folds_nothing_and_split_where_it_would():
+    """copies._flip and copies._split on a quad of two patch faces, (u, w, x) and (w, u, y): the
+    flip makes x - y the diagonal, the split puts m on u - w; both keep the faces' orientation."""
+    from algorithms.copies import _flip, _split, _Star
+
+    u, w, x, y = 0, 1, 2, 3
+    quad = np.array([[u, w, x], [w, u, y]])
+    flat = np.array([[0.0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0]])  # convex: the flip is fine
+    star = _Star(quad)
+    assert _flip(star, flat, u, w, 0)
+    assert sorted(map(sorted, star.rows)) == [[0, 2, 3], [1, 2, 3]] and w not in star.neighbours(u)
+    et = edge_table(np.array(star.rows))
+    assert et.edges[et.counts == 2].tolist() == [[2, 3]]
+    assert not _flip(_Star(quad), flat, u, w, 2)  # input faces are never flipped
+    dart = flat.copy()
+    dart[3] = [-0.5, -0.1, 0]  # the quad u y w x dented at u: the face u y x would be upside down
+    assert not _flip(_Star(quad), dart, u, w, 0)
+    star = _Star(quad)
+    assert _split(star, u, w, 4, 0)
+    F = np.array(star.rows)
+    assert len(F) == 4 and w not in star.neighbours(u) and star.neighbours(4) == {u, w, x, y}
+    et = edge_table(F)
+    assert et.counts.max() == 2 and sorted(map(tuple, et.edges[et.counts == 2].tolist())) == \
+        [(0, 4), (1, 4), (2, 4), (3, 4)]
+    # orientation: every interior edge is walked once each way
+    d = {(int(a), int(b)) for r in F for a, b in zip(r, np.roll(r, -1))}
+    assert all((b, a) in d for a, b in d if 4 in (a, b))
+
+
+def test_copies_with_a_neighbour_in_common_are_joined_after_parting_them(monkeypatch):
+    """mushroom sweep cut 15:1 (light): the darning ran patch faces from each of two copies of a
+    point on the stem's rim to a vertex of the other copy's input fan, so the two had two
+    neighbours in common and no contraction could join them: two copies left apart, the output
+    not closed once merged by position. Parted from those neighbours first (copies._unshared), the
+    copies are joined and the output closes."""
+    import algorithms.copies as copies
+
+    monkeypatch.setattr(copies, "UNSHARE", False)
+    res = sweep_repair("mushroom:15:1")
+    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
+    assert len(coincident_groups(V, F)) == 2 and "2 copies of a point left apart" in res.tunnel_note
+    assert not topology(merge_positions(V, F, 1e-9)[1]).watertight
+    monkeypatch.setattr(copies, "UNSHARE", True)
+    res = sweep_repair("mushroom:15:1")
+    V, F = np.asarray(res.mesh.vertices), np.asarray(res.mesh.faces)
+    assert not coincident_groups(V, F) and "left apart" not in res.tunnel_note and res.copies_parted == 2
+    topo = topology(merge_positions(V, F, 1e-9)[1])
+    assert topo.watertight and topo.manifold_vertices and topo.components == 1
+    assert_input_kept(res.model, res.mesh)
