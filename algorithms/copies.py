@@ -258,8 +258,9 @@ def _through_faces(star: _Star, c: int, keep: int, n_fixed_faces: int, limit: in
 
 def _flip(star: _Star, V: NDArray[np.float64], u: int, w: int, n_fixed_faces: int) -> bool:
     """Flip the edge (u, w) in place if both its faces are patch faces (not among the first
-    ``n_fixed_faces``), the other diagonal is no edge yet and the two new faces keep the side the
-    old pair faced (each new normal within 90 degrees of the old pair's summed normal)."""
+    ``n_fixed_faces``), the other diagonal is no edge yet nor of no length (two copies of one point
+    joined by an edge cannot be joined into one vertex) and the two new faces keep the side the old
+    pair faced (each new normal within 90 degrees of the old pair's summed normal)."""
     both = [i for i in star.at.get(u, ()) if w in star.rows[i]]
     if len(both) != 2 or min(both) < n_fixed_faces:
         return False
@@ -273,8 +274,8 @@ def _flip(star: _Star, V: NDArray[np.float64], u: int, w: int, n_fixed_faces: in
             return False  # inconsistent orientation across the edge
     x = ri[(k + 2) % 3]
     y = next(v for v in rj if v not in (u, w))
-    if x == y or y in star.neighbours(x):
-        return False
+    if x == y or y in star.neighbours(x) or np.linalg.norm(V[x] - V[y]) <= 1e-6 * np.linalg.norm(V[u] - V[w]):
+        return False  # an edge already, or one between two copies of a point (cylinder-sub+speckle 1:0)
 
     def normal(r: list[int]) -> NDArray[np.float64]:
         return np.cross(V[r[1]] - V[r[0]], V[r[2]] - V[r[0]])
@@ -360,7 +361,7 @@ def _join(star: _Star, c: int, keep: int, new: NDArray[np.bool_], n_fixed_faces:
 
 
 def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed: int, n_fixed_faces: int, *,
-                held: NDArray[np.int64] | None = None, max_path: int = MAX_PATH) -> Joined:
+                held: NDArray[np.int64] | None = None, max_path: int = MAX_PATH, unshare: bool = True) -> Joined:
     """Join every group of vertices at one position (:func:`coincident_groups`) into its smallest
     index by contracting paths of new vertices (index ``n_fixed`` or more) between them (module
     docstring). A join is kept only if every vertex it touched has one fan afterwards; otherwise
@@ -368,7 +369,8 @@ def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed
     neighbours), and so it does if a join would remove one of the first
     ``n_fixed_faces`` faces (the input's). Copies that no join reaches because they have neighbours
     in common are parted from those first (:func:`_unshared`: patch edges flipped or split; the
-    vertices a split adds are appended to the vertices returned). Faces are returned in their order
+    vertices a split adds are appended to the vertices returned; not with ``unshare`` False). Faces
+    are returned in their order
     with the removed ones left out. ``held``: new vertices that must stay (crease chains) and so are
     on no contracted path."""
     F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
@@ -393,7 +395,7 @@ def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed
                 left += 1  # two input vertices almost at one point: joined, an input face would move
                 continue
             got = _join(star, c, keep, new, n_fixed_faces, max_path)
-            if got is None and UNSHARE:  # neighbours in common: parted from one of the two first
+            if got is None and UNSHARE and unshare:  # neighbours in common: parted from one of the two first
                 un = _unshared(star, V, c, keep, new, n_fixed_faces)
                 if un is not None:
                     n_new = np.ones(len(un[1]), dtype=bool)

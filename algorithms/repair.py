@@ -1026,7 +1026,10 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         # copies of one point (a pinch of the input, or patches meeting at a vertex only) joined into one
         # vertex before the refinement, which then evens out the faces the joins moved (copies.py)
         V, F, pinched = _split_pinches(V, F, model.mesh.n_faces)
-        joins = join_copies(V, F, n_input, n_before, held=np.union1d(keep_still, crease_v))
+        # (copies that would need parting from neighbours in common wait for the last joins: parted
+        # here, the refinement's flips around them left a copy next to its kept vertex, cylinder-sub
+        # cut by speckle 1:0, not closed)
+        joins = join_copies(V, F, n_input, n_before, held=np.union1d(keep_still, crease_v), unshare=False)
         V, F, n_joined, n_moved, n_parted = joins.vertices, joins.faces, joins.joined, joins.moved, joins.parted
         fixed = F[:n_before]
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
