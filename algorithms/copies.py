@@ -112,10 +112,29 @@ class _Star:
         out.discard(v)
         return out
 
+    def faces_on(self, u: int, w: int) -> list[int]:
+        """The faces that hold the edge (u, w)."""
+        return [i for i in self.at.get(u, ()) if w in self.rows[i]]
+
+    def patch_pair(self, u: int, w: int, n_fixed_faces: int) -> tuple[int, int, int, int] | None:
+        """(i, j, x, y) for an edge (u, w) between two patch faces (none of the first
+        ``n_fixed_faces``) of consistent orientation: face i runs u -> w -> x, face j w -> u -> y;
+        None otherwise."""
+        both = self.faces_on(u, w)
+        if len(both) != 2 or min(both) < n_fixed_faces:
+            return None
+        i, j = both
+        if self.rows[i][(self.rows[i].index(u) + 1) % 3] != w:
+            i, j = j, i
+        ri, rj = self.rows[i], self.rows[j]
+        if ri[(ri.index(u) + 1) % 3] != w or rj[(rj.index(w) + 1) % 3] != u:
+            return None  # inconsistent orientation across the edge
+        return i, j, ri[(ri.index(u) + 2) % 3], rj[(rj.index(u) + 1) % 3]
+
     def link_condition(self, u: int, k: int) -> bool:
         """Whether the edge (u, k) has exactly two faces and the vertices adjacent to both ends are
         exactly their third vertices (Dey et al. 1999)."""
-        both = [i for i in self.at.get(u, ()) if k in self.rows[i]]
+        both = self.faces_on(u, k)
         if len(both) != 2:
             return False
         opposite = {v for i in both for v in self.rows[i] if v not in (u, k)}
@@ -261,19 +280,11 @@ def _flip(star: _Star, V: NDArray[np.float64], u: int, w: int, n_fixed_faces: in
     ``n_fixed_faces``), the other diagonal is no edge yet nor of no length (two copies of one point
     joined by an edge cannot be joined into one vertex) and the two new faces keep the side the old
     pair faced (each new normal within 90 degrees of the old pair's summed normal)."""
-    both = [i for i in star.at.get(u, ()) if w in star.rows[i]]
-    if len(both) != 2 or min(both) < n_fixed_faces:
+    pair = star.patch_pair(u, w, n_fixed_faces)
+    if pair is None:
         return False
-    i, j = both
+    i, j, x, y = pair
     ri, rj = star.rows[i], star.rows[j]
-    k = ri.index(u)
-    if ri[(k + 1) % 3] != w:  # face i runs u -> w
-        i, j, ri, rj = j, i, rj, ri
-        k = ri.index(u)
-        if ri[(k + 1) % 3] != w:
-            return False  # inconsistent orientation across the edge
-    x = ri[(k + 2) % 3]
-    y = next(v for v in rj if v not in (u, w))
     if x == y or y in star.neighbours(x) or np.linalg.norm(V[x] - V[y]) <= 1e-6 * np.linalg.norm(V[u] - V[w]):
         return False  # an edge already, or one between two copies of a point (cylinder-sub+speckle 1:0)
 
@@ -295,18 +306,10 @@ def _flip(star: _Star, V: NDArray[np.float64], u: int, w: int, n_fixed_faces: in
 def _split(star: _Star, u: int, w: int, m: int, n_fixed_faces: int) -> bool:
     """Split the edge (u, w) in place at a new vertex ``m`` if both its faces are patch faces: each
     of the two faces becomes two, and u and w are no longer next to each other."""
-    both = [i for i in star.at.get(u, ()) if w in star.rows[i]]
-    if len(both) != 2 or min(both) < n_fixed_faces:
+    pair = star.patch_pair(u, w, n_fixed_faces)
+    if pair is None:
         return False
-    i, j = both
-    ri = star.rows[i]
-    if ri[(ri.index(u) + 1) % 3] != w:  # face i runs u -> w
-        i, j = j, i
-    ri, rj = star.rows[i], star.rows[j]
-    if rj[(rj.index(w) + 1) % 3] != u:
-        return False  # inconsistent orientation across the edge
-    x = next(v for v in ri if v not in (u, w))
-    y = next(v for v in rj if v not in (u, w))
+    i, j, x, y = pair
     n = len(star.rows)
     star.rows[i], star.rows[j] = [u, m, x], [w, m, y]
     star.rows += [[m, w, x], [m, u, y]]
@@ -338,7 +341,7 @@ def _unshared(star: _Star, V: NDArray[np.float64], c: int, keep: int, new: NDArr
         if any(_flip(trial, pos, x, s, n_fixed_faces) for x in (c, keep)):
             continue
         for x in (c, keep):
-            opposite = [v for i in trial.at.get(x, ()) if s in trial.rows[i] for v in trial.rows[i] if v not in (x, s)]
+            opposite = [v for i in trial.faces_on(x, s) for v in trial.rows[i] if v not in (x, s)]
             if _split(trial, x, s, len(pos), n_fixed_faces):
                 mid = (pos[x] + pos[s]) / 2
                 pos = np.vstack([pos, mid + 0.25 * (pos[opposite].mean(axis=0) - mid)])
@@ -370,9 +373,8 @@ def join_copies(vertices: NDArray[np.float64], faces: NDArray[np.int64], n_fixed
     ``n_fixed_faces`` faces (the input's). Copies that no join reaches because they have neighbours
     in common are parted from those first (:func:`_unshared`: patch edges flipped or split; the
     vertices a split adds are appended to the vertices returned; not with ``unshare`` False). Faces
-    are returned in their order
-    with the removed ones left out. ``held``: new vertices that must stay (crease chains) and so are
-    on no contracted path."""
+    are returned in their order with the removed ones left out. ``held``: new vertices that must
+    stay (crease chains) and so are on no contracted path."""
     F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     groups = coincident_groups(vertices, F)
     V = np.array(vertices, dtype=np.float64, copy=True)

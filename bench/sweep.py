@@ -33,6 +33,7 @@ from scipy.sparse.csgraph import dijkstra
 import bench.repair as bench_repair
 from algorithms import cases as gen
 from algorithms.mesh import Mesh
+from algorithms.topology import edge_table
 from bench.cases import DATA, BenchCase, ball, load, slab
 from bench.repair import angle_target, meshlib_fill, ours_repair, run_isolated, score
 
@@ -175,18 +176,19 @@ MODELS = {
 STYLES = ("balls", "cross", "speckle", "patches")  # how make_cut removes faces (a cut not by balls is named so)
 
 
-def geodesic_patch(mesh: Mesh, seed: int, radius: float) -> NDArray[np.bool_]:
-    """Faces whose centroid lies within ``radius`` of vertex ``seed`` measured over the surface
-    (shortest paths along the edges, then on to the centroid): a hole that stays on its side of a
-    thin wall, as a scanner's occlusion does, where a ball takes both sides."""
+def geodesic_patches(mesh: Mesh, seeds: list[int], radii: list[float]) -> NDArray[np.bool_]:
+    """Faces whose centroid lies within ``radii[k]`` of vertex ``seeds[k]`` for some k, measured
+    over the surface (shortest paths along the edges, then on to the centroid): holes that stay on
+    their side of a thin wall, as a scanner's occlusions do, where a ball takes both sides."""
     V, F = mesh.vertices, mesh.faces
-    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    w = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
-    g = coo_matrix((w, (e[:, 0], e[:, 1])), shape=(len(V), len(V))).tocsr()
-    d = dijkstra(g, directed=False, indices=seed, limit=2 * radius)
-    c = gen.face_centroids(mesh)
-    to_c = d[F] + np.linalg.norm(V[F] - c[:, None], axis=2)  # through each corner to the centroid
-    return to_c.min(axis=1) < radius
+    e = edge_table(F).edges
+    g = coo_matrix((np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1), (e[:, 0], e[:, 1])), shape=(len(V), len(V)))
+    to_corner = np.linalg.norm(V[F] - gen.face_centroids(mesh)[:, None], axis=2)
+    out = np.zeros(len(F), dtype=bool)
+    for seed, radius in zip(seeds, radii):  # one search per disk, each within its own radius
+        d = dijkstra(g.tocsr(), directed=False, indices=seed, limit=radius)
+        out |= (d[F] + to_corner).min(axis=1) < radius  # through each corner to the centroid
+    return out
 
 
 def make_cut(model: str, seed: int, it: int, style: str = "balls") -> BenchCase:
@@ -228,8 +230,8 @@ def make_cut(model: str, seed: int, it: int, style: str = "balls") -> BenchCase:
             rm |= slab(truth, n, float(centre @ n / np.linalg.norm(n)), rng.uniform(0.015, 0.03) * d)
         fp = 100 if rng.random() < 0.5 else 0
     elif style == "patches":
-        for _ in range(rng.integers(1, 6)):
-            rm |= geodesic_patch(truth, int(rng.integers(truth.n_vertices)), rng.uniform(0.04, 0.15) * d)
+        draws = [(int(rng.integers(truth.n_vertices)), rng.uniform(0.04, 0.15) * d) for _ in range(rng.integers(1, 6))]
+        rm |= geodesic_patches(truth, [x for x, _ in draws], [r for _, r in draws])
         fp = 100 if rng.random() < 0.5 else 0
     else:
         rm = rng.random(truth.n_faces) < rng.uniform(0.02, 0.08)
