@@ -479,8 +479,8 @@ def markdown(rows: list[dict], cases: list[BenchCase], notes: list[str], samples
         notes = notes + [f"on {', '.join(lost)} our repair misses input faces: normalisation sets aside tiny fragments "
                          "(at most 8 faces) that touch the surface only at a vertex (reported in `set_aside`); the "
                          "'every input face kept' target is not met there"]
-    if notes:
-        parts += ["", "Notes: " + "; ".join(notes) + "."]
+    if notes:  # each once (a note passed again with --note when the rows are rewritten)
+        parts += ["", "Notes: " + "; ".join(dict.fromkeys(n.rstrip(".; ") for n in notes)) + "."]
     return "\n".join(parts)
 
 
