@@ -81,7 +81,7 @@ def worst_by_loop(case: BenchCase, V: np.ndarray, F: np.ndarray, loops: list[np.
 def explain(name: str, mode: str = "light", *, meshlib: bool = False, samples: int = 20000) -> dict:
     """Everything the text report prints, as a dict (see the module's docstring)."""
     from bench.repair import meshlib_fill, score
-    from bench.sweep import cut_named
+    from bench.sweep import cut_named, hidden_handles
 
     case = cut_named(name)
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
@@ -95,7 +95,7 @@ def explain(name: str, mode: str = "light", *, meshlib: bool = False, samples: i
     loops = [np.asarray(origin[f.vertices]) for f in frames]
     out = {
         "name": name, "mode": mode, "genus": case.genus, "free_points": int(len(case.free_points)),
-        "set_aside": len(model.set_aside),
+        "set_aside": len(model.set_aside), "hidden_handles": hidden_handles(case),
         "islands": [{"island": i.index, "faces": i.faces, "euler": i.euler, "loops": len(i.loops), "genus": i.genus}
                     for i in summary.islands],
         "loops": [{"loop": k, "island": int(f.island), "vertices": int(len(f.vertices)),
@@ -117,7 +117,9 @@ def explain(name: str, mode: str = "light", *, meshlib: bool = False, samples: i
 def text(r: dict) -> str:
     s = r["score"]
     lines = [f"{r['name']} ({r['mode']}): truth genus {r['genus']}, {r['free_points']} free points, "
-             f"{r['set_aside']} faces set aside; class {r['class']}, L_c {r['lc']:.3g}",
+             f"{r['set_aside']} faces set aside; class {r['class']}, L_c {r['lc']:.3g}"
+             + (f"; the cut took {r['hidden_handles']} handle(s) whole (no pair of loops carries them)"
+                if r.get("hidden_handles") else ""),
              f"ours: topology {'right' if s['topology_right'] else 'WRONG'} (watertight {s['watertight']}, "
              f"components {s['components']}, genus {s['genus']}), Hausdorff {100 * (s.get('hausdorff') or 0):.2f} %"]
     if "score_meshlib" in r:

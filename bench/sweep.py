@@ -241,6 +241,30 @@ def make_cut(model: str, seed: int, it: int, style: str = "balls") -> BenchCase:
                      c.description)
 
 
+def hidden_handles(case: BenchCase) -> int:
+    """Handles the cut took whole: the genus of the part of the truth the cut removed (its faces,
+    split where pieces meet at a vertex only, as normalisation splits an input), summed over its
+    pieces. Such a handle leaves no trace in the input's loops: a torus with a band across its tube
+    removed keeps two facing loops (a tunnel), but a torus with the half that holds a handle removed
+    keeps a disk and a ring whose loops say nothing of it (bench/sweep.py flat-torus:25:1: the removed
+    half has genus 1; every filler that reads the loops caps it). A cut with hidden handles is
+    scored like any other; the table counts them so that a miss there is read as what it is."""
+    from algorithms.metrics import topology
+    from algorithms.repair import _split_pinches
+
+    truth = case.truth
+    if truth is None:
+        return 0
+    at = {tuple(v): i for i, v in enumerate(np.asarray(truth.vertices))}  # the cut keeps the truth's coordinates
+    to_truth = np.array([at.get(tuple(v), -1) for v in np.asarray(case.vertices)])
+    kept = {tuple(sorted(f)) for f in to_truth[np.asarray(case.faces)].tolist()}
+    removed = np.array([tuple(sorted(f)) not in kept for f in np.asarray(truth.faces).tolist()], dtype=bool)
+    if not removed.any():
+        return 0
+    _, part, _ = _split_pinches(np.asarray(truth.vertices), np.asarray(truth.faces)[removed], 0)
+    return int(round(topology(part).genus))
+
+
 def cut_named(name: str) -> BenchCase:
     """The cut a name stands for: MODEL:SEED:IT (balls) or MODEL+STYLE:SEED:IT (``make_cut``)."""
     tag, seed, it = name.split(":")
@@ -357,7 +381,20 @@ def markdown(rows: list[dict], command: str) -> str:
         f"in the ratios MeshLib's distance counts as at least {100 * RATIO_FLOOR:g} % (it is exact on some cuts). "
         "Patch angles on target: the issue's bound (no angle below 15°, under 5 % below 20°) over the angles "
         "that some fill could avoid, as in the repair benchmark's unforced columns (`bench.repair.angle_target`).",
-        "", table(head, out)])
+        "", table(head, out)] + _hidden_note(by_cut, methods))
+
+
+def _hidden_note(by_cut: dict[str, dict[str, dict]], methods: list[str]) -> list[str]:
+    """A line under the table: the cuts that took a handle whole (``hidden_handles``, read from
+    rows that have it) and how each method did there; nothing for rows without it."""
+    known = {c: d for c, d in by_cut.items() if any("hidden_handles" in r for r in d.values())}
+    hidden = [d for d in known.values() if any(r.get("hidden_handles") for r in d.values())]
+    if not known:
+        return []
+    right = ", ".join(f"{m} {sum(bool(d[m].get('topology_right')) for d in hidden if m in d)}" for m in methods)
+    return ["", f"Cuts that took a handle whole (the removed part has genus > 0, `bench.sweep.hidden_handles`: "
+                f"no pair of the input's loops carries it): {len(hidden)} of {len(known)}"
+                + (f"; topology right there: {right}." if hidden else ".")]
 
 
 def _command(a: argparse.Namespace) -> str:
@@ -419,9 +456,10 @@ def main(argv: list[str] | None = None) -> int:
             np.savez(Path(a.save) / f"{case.name.replace(':', '_')}.npz", vertices=case.vertices, faces=case.faces,
                      free_points=case.free_points, truth_vertices=case.truth.vertices, truth_faces=case.truth.faces,
                      genus=case.genus)
+        hidden = hidden_handles(case)
         for label, fn in methods.items():
             status, got = run_isolated(fn, case, a.timeout)
-            row = {"case": case.name, "method": label.removeprefix("ours-"), "status": status}
+            row = {"case": case.name, "method": label.removeprefix("ours-"), "status": status, "hidden_handles": hidden}
             if status == "ok":
                 V2, F2, dt = got
                 row.update(score(case, V2, F2, samples=a.samples), seconds=dt)
