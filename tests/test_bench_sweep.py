@@ -16,7 +16,7 @@ def _case(truth, removed) -> BenchCase:
 def test_a_cut_across_a_tube_hides_no_handle_and_half_a_torus_one():
     """A torus (genus 1). A ball across its tube removes a band: the handle shows as two facing
     loops, none is hidden. The faces with x < 0.3 removed: a bent piece of tube (a cylinder, genus 0):
-    none hidden either, its two rims face each other across the kept piece. Everything removed but
+    none hidden either, the kept piece's two rims carry the handle. Everything removed but
     one disk (or two) of the tube's wall: the removed part is the torus less a disk, genus 1, and the
     input's one loop (or two) says nothing of the handle."""
     t = gen.torus(1.0, 0.3, 48, 16)
