@@ -60,6 +60,37 @@ def refusal_table(res: RepairResult, loop_of: dict[int, int]) -> dict[tuple[int,
     return dict(sorted(out.items()))
 
 
+def rim_table(frames: list, lines: dict[tuple[int, int], list[float]]) -> list[dict]:
+    """The facing-rims measures (``repair_field.facing_rims``) of the loop pairs the rules may read:
+    pairs joined by an arrived line, and pairs of loops both steep enough for the slanted test. Per
+    pair (a < b): mean |n . N| of each (``rim_axis``), mean b . u of each towards the other, |N . u|
+    of each, centroid distance, mean radii, and which tests pass (square, slanted; of one island or
+    of two, with ``_between``'s verdict)."""
+    import algorithms.repair_field as rf
+
+    geo = [rf.rim_axis(f) for f in frames]
+    joined = {(min(a, b), max(a, b)) for a, b in lines if a >= 0 and b >= 0 and a != b}
+    out = []
+    for a in range(len(frames)):
+        for b in range(a + 1, len(frames)):
+            steep = geo[a][2] < rf.SLANT_RIM and geo[b][2] < rf.SLANT_RIM
+            if (a, b) not in joined and not steep:
+                continue
+            d = geo[b][0] - geo[a][0]
+            dist = float(np.linalg.norm(d))
+            u = d / dist if dist > 0 else d
+            one = frames[a].island == frames[b].island
+            slanted = {"rim": rf.SLANT_RIM, "facing": rf.SLANT_FACING, "across": rf.SLANT_ACROSS}
+            tests = {name: (a, b) in rf.facing_rims(frames, [a, b], same_island=one, **kw)
+                     for name, kw in (("square", {}), ("slanted", slanted))}
+            out.append({"pair": (a, b), "same_island": one, "rim": (geo[a][2], geo[b][2]),
+                        "facing": (float((frames[a].outward @ u).mean()), float((frames[b].outward @ -u).mean())),
+                        "across": (abs(float(geo[a][1] @ u)), abs(float(geo[b][1] @ u))), "distance": dist,
+                        "radii": (rf.loop_radius(frames[a]), rf.loop_radius(frames[b])),
+                        "between": rf._between(frames, {k: g for k, g in enumerate(geo)}, a, b), **tests})
+    return out
+
+
 def worst_by_loop(case: BenchCase, V: np.ndarray, F: np.ndarray, loops: list[np.ndarray], *,
                   samples: int = 20000) -> list[tuple[float, float]]:
     """Per loop: the largest distance (% of the truth's diagonal) from the truth to the output and
@@ -104,6 +135,7 @@ def explain(name: str, mode: str = "light", *, meshlib: bool = False, samples: i
                   for k, f in enumerate(frames)],
         "lc": res.lc, "lines": line_table(res, loop_of), "bridges": bridge_table(res, loop_of),
         "refused": refusal_table(res, loop_of), "notes": res.tunnel_note, "class": res.class_found,
+        "rims": rim_table(frames, line_table(res, loop_of)),
         "score": score(case, V, F, samples=samples),
         "worst": {"ours": worst_by_loop(case, V, F, loops, samples=samples)},
     }
@@ -144,6 +176,14 @@ def text(r: dict) -> str:
     lines.append("refused (loop pair: reasons):")
     for (a, b), reasons in r["refused"].items():
         lines.append(f"  {a}-{b}: " + "; ".join(f"{n} x {why}" for why, n in reasons.most_common(4)))
+    if r.get("rims"):
+        lines.append("rims (pairs joined by a line or both steep: mean |n . N|, facing, across, distance, radii):")
+        lines += [f"  {x['pair'][0]}-{x['pair'][1]}{'' if x['same_island'] else ' (two islands)'}: "
+                  f"{x['rim'][0]:.2f} / {x['rim'][1]:.2f}, {x['facing'][0]:.2f} / {x['facing'][1]:.2f}, "
+                  f"{x['across'][0]:.2f} / {x['across'][1]:.2f}, {x['distance']:.3g}, "
+                  f"{x['radii'][0]:.3g} / {x['radii'][1]:.3g}"
+                  + "".join(f"; {t}" for t in ("square", "slanted") if x[t])
+                  + ("; a rim between" if x["between"] else "") for x in r["rims"]]
     if r["notes"]:
         lines.append("notes: " + r["notes"])
     return "\n".join(lines)

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from algorithms.boundary import summarize
 from algorithms.normalize import normalize
 from algorithms.topology import boundary_loops, euler_characteristic, islands
 from bench.explain import explain, text
@@ -48,3 +49,28 @@ def test_explain_a_torus_cut_into_islands_reads_its_islands_loops_and_bridges():
     out = text(r)
     assert out.startswith(f"{name} (light): truth genus 1")
     assert "topology right" in out and "bridges kept" in out
+
+
+def test_the_rim_table_measures_a_tube_cut_square_and_a_round_hole():
+    """rim_table on a thin torus cut by a ball across its tube (two rims facing each other, the
+    tube's wall square on each cut: the square test passes) and on a sphere with two holes (flat
+    holes: no pair is steep, and without a line between them none is listed)."""
+    from algorithms import cases as gen
+    from bench.cases import ball
+    from bench.explain import rim_table
+
+    t = gen.torus(1.0, 0.15, 96, 16)
+    cut = gen.cut(t, ball(t, np.array([1.15, 0.0, 0.0]), 0.35), name="tube", description="", free_points=0, seed=1)
+    frames = list(summarize(normalize(cut.incomplete.vertices, cut.incomplete.faces)).loops)
+    (row,) = rim_table(frames, {})
+    assert row["pair"] == (0, 1) and row["same_island"] and row["square"] and row["slanted"]
+    assert max(row["rim"]) < 0.3 and min(row["facing"]) > 0.6 and min(row["across"]) > 0.8
+    assert not row["between"] and row["distance"] == pytest.approx(
+        np.linalg.norm(frames[0].points.mean(axis=0) - frames[1].points.mean(axis=0)), rel=0.05)
+    s = gen.icosphere(4)
+    holes = ball(s, np.array([0.0, 0.0, 1.0]), 0.3) | ball(s, np.array([0.0, 0.0, -1.0]), 0.3)
+    cut = gen.cut(s, holes, name="s", description="", free_points=0, seed=1)
+    frames = list(summarize(normalize(cut.incomplete.vertices, cut.incomplete.faces)).loops)
+    assert len(frames) == 2 and rim_table(frames, {}) == []
+    (row,) = rim_table(frames, {(0, 1): [0.5]})  # a line between them: listed, no test passes
+    assert min(row["rim"]) > 0.9 and not row["square"] and not row["slanted"]
