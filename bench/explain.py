@@ -1,6 +1,7 @@
 """Why a sweep cut comes back the way it does: its islands and loops (after normalisation, as the
 repair sees them), the force lines between the
-loops, the bridges kept and refused, and where the output is farthest from the truth, loop by loop.
+loops, the bridges kept and refused, the facing-rims measures of the loop pairs the rules read
+(``rim_table``), and where the output is farthest from the truth, loop by loop.
 
     python -m bench.explain MODEL[+STYLE]:SEED:IT [--mode light|full] [--meshlib] [--samples N]
 
