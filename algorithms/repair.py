@@ -842,7 +842,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
     timings_note: dict[str, str] = {}
     n_before = len(work.F())
     n_input = model.mesh.n_vertices
-    pinched = n_joined = n_moved = n_parted = 0  # vertices split where the surface met itself at a point; copies joined
+    pinched = n_joined = n_moved = 0  # vertices split where the surface met itself at a point; copies joined
     on_crease = np.zeros(work.n, dtype=bool)
     for ids in pinned:
         on_crease[ids] = True
@@ -1030,7 +1030,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         # here, the refinement's flips around them left a copy next to its kept vertex, cylinder-sub
         # cut by speckle 1:0, not closed)
         joins = join_copies(V, F, n_input, n_before, held=np.union1d(keep_still, crease_v), unshare=False)
-        V, F, n_joined, n_moved, n_parted = joins.vertices, joins.faces, joins.joined, joins.moved, joins.parted
+        V, F, n_joined, n_moved = joins.vertices, joins.faces, joins.joined, joins.moved
         fixed = F[:n_before]
         ring = fixed[np.isin(fixed, np.unique(F[n_before:])).any(axis=1)]
         if len(keep_still):  # a pinned vertex in a face of no area: the refinement may move or collapse it
@@ -1046,7 +1046,6 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
     V, F = joins.vertices, joins.faces
     F = np.vstack([F[:n_before], _collapse_flat(V, F[:n_before], F[n_before:], n_input, locked)])
     n_joined += joins.joined
-    n_parted += joins.parted
     n_moved += joins.moved
     said = [f"{n_joined} copies of a point joined into one vertex" if n_joined else "",
             f"{n_moved} new vertices moved off an input vertex" if n_moved else "",
@@ -1066,7 +1065,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
     return RepairResult(out, model, params, class_found, tuple(bridges), tuple(lines), tuple(rejected),
                         tuple(records), tuple(stages), new_faces, timings, lc_used,
                         timings_note.get("fairing", "none"), "; ".join([tunnel_note, *notes]).strip("; "), attached,
-                        joins.left, n_parted, pinch_pairs, pinch_pairs_all)
+                        joins.left, joins.parted, pinch_pairs, pinch_pairs_all)  # parted: the last joins only
 
 
 def _collapse_flat(V: NDArray[np.float64], F_in: NDArray[np.int64], F_new: NDArray[np.int64], n_input: int,
@@ -1380,8 +1379,7 @@ def _slanted_island_rims(frames: list, islands) -> set[tuple[int, int]]:
     from . import repair_field as rf
 
     tube = [k for k, f in enumerate(frames) if len(islands[f.island].loops) >= 2]
-    return rf.facing_rims(frames, tube, same_island=False, rim=rf.SLANT_RIM, facing=rf.SLANT_FACING,
-                          across=rf.SLANT_ACROSS)
+    return rf.slanted_rims(frames, tube, same_island=False)
 
 
 THROUGH_AN_ISLAND = True

@@ -160,7 +160,7 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
                      for k, got in from_loop.items()}
     facing = facing_rims(frames, loop_ids)
     if SLANTED_RIMS:
-        facing |= facing_rims(frames, loop_ids, rim=SLANT_RIM, facing=SLANT_FACING, across=SLANT_ACROSS)
+        facing |= slanted_rims(frames, loop_ids)
     centre = {k: frames[k].points.mean(axis=0) for k in loop_ids}
     size = {k: loop_radius(frames[k]) for k in loop_ids}
     near = {(a, b) for a in loop_ids for b in loop_ids if a < b and
@@ -466,6 +466,14 @@ def facing_rims(frames: list[LoopFrame], loop_ids: list[int], *, rim: float = RI
                     and not _between(frames, geo, a, b):
                 out.add((min(a, b), max(a, b)))
     return out
+
+
+def slanted_rims(frames: list[LoopFrame], loop_ids: list[int], *, same_island: bool = True) -> set[tuple[int, int]]:
+    """``facing_rims`` with the thresholds of rims cut at a slant (SLANT_RIM, SLANT_FACING,
+    SLANT_ACROSS): the second test of step 2 (``tunnel_lines``), of step 1's rims of two islands
+    (``repair._slanted_island_rims``) and of step 1's walks (``repair.WALK_*``)."""
+    return facing_rims(frames, loop_ids, rim=SLANT_RIM, facing=SLANT_FACING, across=SLANT_ACROSS,
+                       same_island=same_island)
 
 
 def _between(frames: list[LoopFrame], geo: dict, a: int, b: int, *, rim: float = RIM) -> bool:

@@ -69,7 +69,7 @@ def rim_table(frames: list, lines: dict[tuple[int, int], list[float]]) -> list[d
     of two, with ``_between``'s verdict)."""
     import algorithms.repair_field as rf
 
-    geo = [rf.rim_axis(f) for f in frames]
+    geo = {k: rf.rim_axis(f) for k, f in enumerate(frames)}  # every loop: _between reads the others too
     joined = {(min(a, b), max(a, b)) for a, b in lines if a >= 0 and b >= 0 and a != b}
     out = []
     for a in range(len(frames)):
@@ -81,14 +81,13 @@ def rim_table(frames: list, lines: dict[tuple[int, int], list[float]]) -> list[d
             dist = float(np.linalg.norm(d))
             u = d / dist if dist > 0 else d
             one = frames[a].island == frames[b].island
-            slanted = {"rim": rf.SLANT_RIM, "facing": rf.SLANT_FACING, "across": rf.SLANT_ACROSS}
-            tests = {name: (a, b) in rf.facing_rims(frames, [a, b], same_island=one, **kw)
-                     for name, kw in (("square", {}), ("slanted", slanted))}
+            tests = {"square": (a, b) in rf.facing_rims(frames, [a, b], same_island=one),
+                     "slanted": (a, b) in rf.slanted_rims(frames, [a, b], same_island=one)}
             out.append({"pair": (a, b), "same_island": one, "rim": (geo[a][2], geo[b][2]),
                         "facing": (float((frames[a].outward @ u).mean()), float((frames[b].outward @ -u).mean())),
                         "across": (abs(float(geo[a][1] @ u)), abs(float(geo[b][1] @ u))), "distance": dist,
                         "radii": (rf.loop_radius(frames[a]), rf.loop_radius(frames[b])),
-                        "between": rf._between(frames, {k: g for k, g in enumerate(geo)}, a, b), **tests})
+                        "between": rf._between(frames, geo, a, b), **tests})
     return out
 
 

@@ -182,11 +182,12 @@ def geodesic_patches(mesh: Mesh, seeds: list[int], radii: list[float]) -> NDArra
     their side of a thin wall, as a scanner's occlusions do, where a ball takes both sides."""
     V, F = mesh.vertices, mesh.faces
     e = edge_table(F).edges
-    g = coo_matrix((np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1), (e[:, 0], e[:, 1])), shape=(len(V), len(V)))
+    g = coo_matrix((np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1), (e[:, 0], e[:, 1])),
+                   shape=(len(V), len(V))).tocsr()
     to_corner = np.linalg.norm(V[F] - gen.face_centroids(mesh)[:, None], axis=2)
     out = np.zeros(len(F), dtype=bool)
     for seed, radius in zip(seeds, radii):  # one search per disk, each within its own radius
-        d = dijkstra(g.tocsr(), directed=False, indices=seed, limit=radius)
+        d = dijkstra(g, directed=False, indices=seed, limit=radius)
         out |= (d[F] + to_corner).min(axis=1) < radius  # through each corner to the centroid
     return out
 

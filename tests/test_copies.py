@@ -249,7 +249,6 @@ def test_copies_on_one_hole_that_a_crease_would_part_are_joined_first(mode):
     assert along and all(len(b.points) == 0 for b in along)
 
 
-
 def test_a_patch_edge_is_flipped_where_that_folds_nothing_and_split_where_it_would():
     """copies._flip and copies._split on a quad of two patch faces, (u, w, x) and (w, u, y): the
     flip makes x - y the diagonal, the split puts m on u - w; both keep the faces' orientation."""

@@ -145,7 +145,7 @@ def test_a_tube_cut_at_a_slant_gets_its_handle_back(name, pair, joined_max, capp
     loops = list(summarize(model).loops)
     ids = list(range(len(loops)))
     assert pair not in rf.facing_rims(loops, ids)
-    assert pair in rf.facing_rims(loops, ids, rim=rf.SLANT_RIM, facing=rf.SLANT_FACING, across=rf.SLANT_ACROSS)
+    assert pair in rf.slanted_rims(loops, ids)
     res = repair(model, RepairParams())
     t = topology(res.mesh.faces)
     assert t.watertight and t.components == 1 and t.genus == 1, res.tunnel_note
@@ -197,8 +197,7 @@ def test_an_island_with_one_loop_is_no_piece_of_tube(monkeypatch):
     summary = summarize(model)
     loops = list(summary.loops)
     assert len(summary.islands[loops[1].island].loops) == 1
-    slanted = rf.facing_rims(loops, list(range(len(loops))), same_island=False, rim=rf.SLANT_RIM,
-                             facing=rf.SLANT_FACING, across=rf.SLANT_ACROSS)
+    slanted = rf.slanted_rims(loops, list(range(len(loops))), same_island=False)
     assert (1, 3) in slanted and (1, 3) not in rp._slanted_island_rims(loops, summary.islands)
     t = topology(repair(model, RepairParams()).mesh.faces)
     assert t.watertight and t.components == 1 and t.genus == 2
