@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from .boundary import LoopFrame
 from .bridges import (
@@ -43,6 +44,8 @@ class LineSet:
     all_lines: tuple[ForceLine, ...]  # every line traced (for the record)
     note: str = ""
     rims: tuple[tuple[int, int], ...] = ()  # facing rims (facing_rims) the pipeline joins, by lines or along the tube
+    # loops joined because they face each other (mutual_closest): (pair, its closest vertex pairs)
+    closest: tuple[tuple[tuple[int, int], tuple[tuple[int, int], ...]], ...] = ()
 
 
 def island_lines(model: Icadm, params: FieldParams, *, progress: Callable[[float, str], None] | None = None,
@@ -165,7 +168,10 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     size = {k: loop_radius(frames[k]) for k in loop_ids}
     near = {(a, b) for a in loop_ids for b in loop_ids if a < b and
             float(np.linalg.norm(centre[a] - centre[b])) <= ONE_WAY_REACH * max(size[a], size[b])}
-    chosen, notes = tunnel_pairs(from_loop, loop_ids, force=force, facing=facing, near=near)
+    # loops facing each other (mutual_closest at MUTUAL vertex pairs or more): evidence beside the lines
+    close = ({pair: vs for pair, vs in mutual_closest(frames, loop_ids).items() if len(vs) >= MUTUAL}
+             if MUTUAL_TUNNELS and not force else {})
+    chosen, notes = tunnel_pairs(from_loop, loop_ids, force=force, facing=facing, near=near, mutual=close)
     notes += [f"loops {a} and {b}: {counts[(a, b)]} lines join them, all along the surface between them: no tunnel"
               for a, b in along]
     if not force and chosen:  # lines that all run along surface that is there: no tunnel
@@ -179,14 +185,28 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     # facing rims the rule joined, or that fewer than two lines joined (the rule could not judge
     # them): the pipeline joins them, by the lines' bridges or by bridges along the tube where the
     # gap is long or the lines do not make two (repair._rim_bridges)
-    joined = {tuple(sorted((pos_in.get(int(ln.start_vertex), -1), pos_in.get(int(ln.end_vertex), -1))))
-              for ln in chosen}
-    between = {pair: sum(t == pair[1] for t, _ in from_loop.get(pair[0], [])) +
-               sum(t == pair[0] for t, _ in from_loop.get(pair[1], [])) for pair in facing}
+    def pairs_of(lines: list[ForceLine]) -> set[tuple[int, int]]:
+        return {tuple(sorted((pos_in.get(int(ln.start_vertex), -1), pos_in.get(int(ln.end_vertex), -1))))
+                for ln in lines}
+
+    def between_count(pair: tuple[int, int]) -> int:
+        return (sum(t == pair[1] for t, _ in from_loop.get(pair[0], [])) +
+                sum(t == pair[0] for t, _ in from_loop.get(pair[1], [])))
+
+    joined = pairs_of(chosen)
+    between = {pair: between_count(pair) for pair in facing}
     rims = tuple(sorted(pair for pair in facing if pair in joined or between[pair] < 2))
     notes += [f"loops {a} and {b}: facing rims of a tube, {between[(a, b)]} line(s) join them"
               for a, b in rims if between[(a, b)] < 2]
-    return LineSet(lc_inter, tuple(chosen), tuple(every), "; ".join(notes), rims)
+    # loops facing each other joined for that (their lines lost the comparison), or that fewer than
+    # two lines join: the pipeline joins them, by their lines or straight bridges between their
+    # closest vertex pairs (repair._closest_bridges)
+    plain = pairs_of(tunnel_pairs(from_loop, loop_ids, facing=facing, near=near)[0]) if close else set()
+    closest = tuple((pair, tuple(vs)) for pair, vs in sorted(close.items())
+                    if pair in joined - plain or between_count(pair) < 2)
+    notes += [f"loops {a} and {b}: closest to each other at {len(vs)} vertex pairs, {between_count((a, b))} "
+              "line(s) join them: joined there" for (a, b), vs in closest if between_count((a, b)) < 2]
+    return LineSet(lc_inter, tuple(chosen), tuple(every), "; ".join(notes), rims, closest)
 
 
 ALONG_COMPETES = False  # tunnel_lines: True, lines of pairs the surface joins still compete (the rule before)
@@ -497,9 +517,50 @@ def _between(frames: list[LoopFrame], geo: dict, a: int, b: int, *, rim: float =
     return False
 
 
+MUTUAL = 8  # mutual_closest: loops closest to each other at this many vertex pairs or more face each other
+MUTUAL_TUNNELS = True  # tunnel_pairs: such loops joined by two or more lines make a tunnel (a switch for measuring)
+
+
+def mutual_closest(frames: list[LoopFrame], loop_ids: list[int]) -> dict[tuple[int, int], list[tuple[int, int]]]:
+    """Pairs (a, b), a < b, of loops of one island among ``loop_ids``, with their vertex pairs
+    (p, q) (vertex indices), p on a and q on b, that are mutually closest: q is the nearest vertex to p
+    on every other loop of ``loop_ids``, and p the nearest to q, and the segment leaves both into
+    their holes (b . (q - p) > 0 at p, b . (p - q) > 0 at q, b the outward vectors of spec §2).
+
+    Two loops closest to each other at two or more such pairs face each other across missing
+    surface: the walls of a through-hole cut on both sides, the two rims of a cut tube. Two holes
+    side by side on one sheet meet at one pair at most: the nearest vertex of the other loop is the
+    same point for every vertex of the far side, and only the closest pair is mutual. MeshLib's
+    bridge filling joins such pairs by an edge each (its ``makeInterHoleBridgeEdges``); here they
+    are evidence for the tunnel rule (``tunnel_pairs``), whose bridges stay the force lines.
+    """
+    if len(loop_ids) < 2:
+        return {}
+    P = np.vstack([frames[k].points for k in loop_ids])
+    B = np.vstack([frames[k].outward for k in loop_ids])
+    L = np.concatenate([np.full(len(frames[k].points), k) for k in loop_ids])
+    nn = np.full(len(P), -1)
+    for k in loop_ids:
+        mine, other = np.flatnonzero(L == k), np.flatnonzero(L != k)
+        nn[mine] = other[cKDTree(P[other]).query(P[mine])[1]]
+    i = np.flatnonzero(nn[nn] == np.arange(len(P)))
+    i, j = i[i < nn[i]], nn[i[i < nn[i]]]
+    d = P[j] - P[i]
+    ok = (np.einsum("ij,ij->i", B[i], d) > 0) & (np.einsum("ij,ij->i", B[j], -d) > 0)
+    V = np.concatenate([frames[k].vertices for k in loop_ids])
+    out: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    for x, y in zip(i[ok].tolist(), j[ok].tolist()):
+        a, b = int(L[x]), int(L[y])
+        if frames[a].island == frames[b].island:
+            va, vb = (int(V[x]), int(V[y])) if a < b else (int(V[y]), int(V[x]))
+            out.setdefault((min(a, b), max(a, b)), []).append((va, vb))
+    return out
+
+
 def tunnel_pairs(from_loop: dict[int, list[tuple[int, ForceLine]]], loop_ids: list[int], *,
                  force: bool = False, facing: set[tuple[int, int]] = frozenset(),
-                 near: set[tuple[int, int]] | None = None) -> tuple[list[ForceLine], list[str]]:
+                 near: set[tuple[int, int]] | None = None, mutual: dict[tuple[int, int], list] | None = None
+                 ) -> tuple[list[ForceLine], list[str]]:
     """The tunnel rule (spec §6 step 2) on traced lines: ``from_loop[k]`` holds (target loop, line)
     for every line from loop k that arrived (-1: not at a loop of ``loop_ids``). Loops a and b are
     joined when two or more lines connect them (either direction) that each have a quality above
@@ -556,11 +617,16 @@ def tunnel_pairs(from_loop: dict[int, list[tuple[int, ForceLine]]], loop_ids: li
             ok = len(wa) + len(wb) >= 2 and (every or bool(wa) and bool(wb))
             far = ok and near is not None and not (ab and ba) and (a, b) not in near
             ok = ok and not far  # lines one way only, between loops far apart for their size
+            closest = len((mutual or {}).get((a, b), ()))
+            facing_pair = not ok and not far and MUTUAL_TUNNELS and closest >= MUTUAL
+            if facing_pair:  # loops that face each other (mutual_closest): every line between them
+                ok, wa, wb = True, ab, ba
             if ok:
                 chosen += wa + wb
             elif force:
                 chosen += ab + ba
-            verdict = ("a tunnel" if ok else "forced" if force else "one way only, too far apart for a tunnel" if far
+            verdict = (f"a tunnel (closest to each other at {closest} vertex pairs)" if facing_pair else
+                       "a tunnel" if ok else "forced" if force else "one way only, too far apart for a tunnel" if far
                        else "beaten by lines across their own holes")
             notes.append(f"loops {a} and {b}: {len(ab) + len(ba)} lines join them, {verdict}"
                          f"{' (facing rims of a tube)' if rims else ''}")
