@@ -517,8 +517,14 @@ def _between(frames: list[LoopFrame], geo: dict, a: int, b: int, *, rim: float =
     return False
 
 
-MUTUAL = 8  # mutual_closest: loops closest to each other at this many vertex pairs or more face each other
-MUTUAL_TUNNELS = True  # tunnel_pairs: such loops joined by two or more lines make a tunnel (a switch for measuring)
+# **(choice)** tunnel_lines: loops closest to each other (mutual_closest) at MUTUAL vertex pairs or
+# more face each other. Set on bench/sweep.py's seeds 11-26 and the crossing-slab, speckle and patch
+# cuts of seeds 1-2: at 2, two holes on the fandisk (13:1) and on featuretype (13:0), holes on either
+# side of frep-bowl's thin wall (11:0) and two 6-vertex holes of a speckled torus met at 2-3 pairs
+# each and were joined: 5 runs in light mode and 7 in full mode went wrong, 5 and 5 came right. At 8
+# (the pairs of every cut that came right: 13-29 on featuretype's through-holes) none went wrong.
+MUTUAL = 8
+MUTUAL_TUNNELS = True  # tunnel_lines: loops facing each other are joined (a switch for measuring)
 
 
 def mutual_closest(frames: list[LoopFrame], loop_ids: list[int]) -> dict[tuple[int, int], list[tuple[int, int]]]:
@@ -527,12 +533,13 @@ def mutual_closest(frames: list[LoopFrame], loop_ids: list[int]) -> dict[tuple[i
     on every other loop of ``loop_ids``, and p the nearest to q, and the segment leaves both into
     their holes (b . (q - p) > 0 at p, b . (p - q) > 0 at q, b the outward vectors of spec §2).
 
-    Two loops closest to each other at two or more such pairs face each other across missing
-    surface: the walls of a through-hole cut on both sides, the two rims of a cut tube. Two holes
-    side by side on one sheet meet at one pair at most: the nearest vertex of the other loop is the
-    same point for every vertex of the far side, and only the closest pair is mutual. MeshLib's
-    bridge filling joins such pairs by an edge each (its ``makeInterHoleBridgeEdges``); here they
-    are evidence for the tunnel rule (``tunnel_pairs``), whose bridges stay the force lines.
+    Two loops closest to each other along a stretch of such pairs face each other across missing
+    surface: the top and bottom rims of a through-hole whose wall a cut took, the two rims of a
+    tube cut square. Two holes side by side on one sheet meet at a pair or a few where they come
+    closest: the nearest vertex of the other loop is about the same point for every vertex of the
+    far side. MeshLib's bridge filling joins every such pair by an edge (two make a tube); here
+    pairs of loops with MUTUAL pairs or more are evidence for the tunnel rule (``tunnel_pairs``),
+    whose bridges stay the force lines where there are two.
     """
     if len(loop_ids) < 2:
         return {}
@@ -593,6 +600,13 @@ def tunnel_pairs(from_loop: dict[int, list[tuple[int, ForceLine]]], loop_ids: li
     that long would be a tube several times longer than it is wide. The closed bunny's held-out cut
     14:0 (full mode) got a handle from two lines one way between holes 3.9 of the larger radius
     apart (6.3 of the smaller; truth genus 0). Seeds 1-10 of bench/sweep.py: no run changed.
+
+    ``mutual``: pairs (a, b), a < b, with their mutually closest vertex pairs (``mutual_closest``).
+    **(choice)** A pair with MUTUAL of them or more, whose lines lost the comparison (not one way
+    only across too long a gap), is joined by every line between the two: the loops face each
+    other. featuretype cut 4:0 (bench/sweep.py, full mode): a through-hole's top and bottom rims,
+    closest at 20 vertex pairs; its two lines between them (6.1, 6.3, from the bottom rim) lost to
+    one through the part's sheet (6.7), and both rims were capped (genus 8, truth 9).
     """
     chosen: list[ForceLine] = []
     notes = []
