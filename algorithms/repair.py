@@ -681,7 +681,8 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
                     # loops facing each other (repair_field.mutual_closest) that fewer than two lines
                     # joined: straight bridges between their closest vertex pairs, farthest apart first
                     for b in _closest_bridges(work.V(), closest[pair], [k for k, _ in kept_pair], loop_of,
-                                              len(frames[pair[0]].vertices), spacing):
+                                              frames[pair[0]], frames[pair[1]], lc_used or tl.lc,
+                                              params.field.ki, spacing):
                         if len(kept_pair) >= 2:
                             break
                         if trial.conflict(b, neighbourhood=0.0, near_ends=False) is None:
@@ -1568,14 +1569,16 @@ def _off_boundary(boundary: BoundaryEdges | None, V: NDArray[np.float64], along:
 
 
 def _closest_bridges(V: NDArray[np.float64], pairs: tuple[tuple[int, int], ...], kept: list[Bridge],
-                     loop_of: dict[int, tuple[int, int]], size: int, spacing: float) -> list[Bridge]:
-    """Straight bridges between the mutually closest vertex pairs ``pairs`` (a on the first loop,
-    of ``size`` vertices, b on the second: repair_field.mutual_closest), in the order they should
-    be tried to make a tunnel's two: each next the farthest, along the first loop, from the ends
-    taken there so far (those of ``kept`` and of the ones before it; with none taken, the shortest
-    pair first). For a run of pairs along two walls facing each other: the two ends of the run,
-    so that the strip between the walls is as wide as it can be."""
-    first = loop_of[pairs[0][0]][0]
+                     loop_of: dict[int, tuple[int, int]], fa, fb, lc: float, ki: float,
+                     spacing: float) -> list[Bridge]:
+    """Straight bridges between the mutually closest vertex pairs ``pairs`` (a on loop ``fa``, b on
+    loop ``fb``: repair_field.mutual_closest), in the order they should be tried to make a tunnel's
+    two: each next the farthest, along the first loop, from the ends taken there so far (those of
+    ``kept`` and of the ones before it; with none taken, the shortest pair first). For a run of
+    pairs along two walls facing each other: the two ends of the run, so that the strip between the
+    walls is as wide as it can be. Each with the straight-bridge quality of spec (9)
+    (:func:`_best_straight_bridge` on the one pair)."""
+    first, size = loop_of[pairs[0][0]][0], len(fa.vertices)
     taken = [loop_of[v][1] for b in kept for v in (b.start, b.end) if loop_of[v][0] == first]
     left = list(pairs)
     out: list[Bridge] = []
@@ -1586,8 +1589,11 @@ def _closest_bridges(V: NDArray[np.float64], pairs: tuple[tuple[int, int], ...],
         else:
             k = int(np.argmin([np.linalg.norm(V[a] - V[b]) for a, b in left]))
         a, b = left.pop(k)
-        taken.append(loop_of[a][1])
-        out.append(Bridge(a, b, resample_chain(np.vstack([V[a], V[b]]), spacing), 0.0, "tunnel"))
+        i, j = loop_of[a][1], loop_of[b][1]
+        taken.append(i)
+        _, _, q = _best_straight_bridge(V[a][None], fa.tangent[i][None], fa.normal[i][None], V[b][None],
+                                        fb.tangent[j][None], lc, ki)
+        out.append(Bridge(a, b, resample_chain(np.vstack([V[a], V[b]]), spacing), q, "tunnel"))
     return out
 
 

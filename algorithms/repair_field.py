@@ -610,12 +610,13 @@ def tunnel_pairs(from_loop: dict[int, list[tuple[int, ForceLine]]], loop_ids: li
     14:0 (full mode) got a handle from two lines one way between holes 3.9 of the larger radius
     apart (6.3 of the smaller; truth genus 0). Seeds 1-10 of bench/sweep.py: no run changed.
 
-    ``mutual``: pairs (a, b), a < b, with their mutually closest vertex pairs (``mutual_closest``).
-    **(choice)** A pair with MUTUAL of them or more, whose lines lost the comparison (not one way
-    only across too long a gap), is joined by every line between the two: the loops face each
-    other. featuretype cut 4:0 (bench/sweep.py, full mode): a through-hole's top and bottom rims,
-    closest at 20 vertex pairs; its two lines between them (6.1, 6.3, from the bottom rim) lost to
-    one through the part's sheet (6.7), and both rims were capped (genus 8, truth 9).
+    ``mutual``: pairs (a, b), a < b, with their mutually closest vertex pairs (``mutual_closest``;
+    ``tunnel_lines`` passes none when MUTUAL_TUNNELS is off). **(choice)** A pair with MUTUAL of
+    them or more, whose lines lost the comparison (not one way only across too long a gap), is
+    joined by every line between the two: the loops face each other. featuretype cut 4:0
+    (bench/sweep.py, full mode): a through-hole's top and bottom rims, closest at 20 vertex pairs;
+    its two lines between them (6.1, 6.3, from the bottom rim) lost to one through the part's
+    sheet (6.7), and both rims were capped (genus 8, truth 9).
     """
     chosen: list[ForceLine] = []
     notes = []
@@ -641,7 +642,7 @@ def tunnel_pairs(from_loop: dict[int, list[tuple[int, ForceLine]]], loop_ids: li
             far = ok and near is not None and not (ab and ba) and (a, b) not in near
             ok = ok and not far  # lines one way only, between loops far apart for their size
             closest = len((mutual or {}).get((a, b), ()))
-            facing_pair = not ok and not far and MUTUAL_TUNNELS and closest >= MUTUAL
+            facing_pair = not ok and not far and closest >= MUTUAL
             if facing_pair:  # loops that face each other (mutual_closest): every line between them
                 ok, wa, wb = True, ab, ba
             if ok:
