@@ -306,9 +306,6 @@ def _to_polygon(X: NDArray[np.float64], P: NDArray[np.float64], *, block: int = 
     return out
 
 
-OFF_LINES = 2  # _off_surface_pairs: a tunnel needs this many lines across missing surface (1: the rule before)
-
-
 def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int], mesh: Mesh, *,
                        on: dict[int, bool] | None = None) -> tuple[list[ForceLine], list[tuple[int, int]]]:
     """The chosen tunnel lines without those of pairs of loops whose every line runs on the input
@@ -329,12 +326,6 @@ def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int], mesh: Me
     round the handle). Of the sweep's pairs the rule chose (seeds 1-10, both modes), those whose
     every line is such a shortcut at SHORTCUT = 2 lie on 24 runs: only that one changed; of the
     cross and speckle cuts of seeds 1-2, annulus+speckle 2:0 full came right (genus 3, truth 1).
-
-    **(choice)** A pair needs OFF_LINES (2) lines off the surface, not one: a tunnel has two
-    bridges, each across the missing surface. featuretype cut 25:1 (light): of the four lines
-    between loops 2 and 4, three cut across the part (edge paths 1.01-1.05 times their length) and
-    one crossed; the tunnel was a handle the part does not have (genus 10, truth 9). Seeds 1-10 of
-    bench/sweep.py (1480 runs): none changed.
     """
     by_pair: dict[tuple[int, int], list[ForceLine]] = {}
     for ln in chosen:
@@ -345,7 +336,7 @@ def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int], mesh: Me
     keep: list[ForceLine] = []
     flat: list[tuple[int, int]] = []
     for pair, lines in by_pair.items():
-        if sum(not on[id(ln)] for ln in lines) < OFF_LINES:
+        if all(on[id(ln)] for ln in lines):
             flat.append(pair)
         else:
             keep += lines
