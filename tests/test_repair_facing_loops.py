@@ -73,17 +73,18 @@ def test_a_through_hole_cut_on_both_sides_keeps_its_handle(monkeypatch):
 
 
 def test_loops_pinched_together_are_not_joined_for_facing_each_other(monkeypatch):
-    """frep-plate3 cut by two crossing slabs (bench/sweep.py frep-plate3+cross:2:0, light mode): the
-    slab's two loops face each other at 14 vertex pairs, and the input joins them at two pinches.
-    The pinches' joins are the handle there: genus 3, the truth. Joined for facing each other as
-    well, they made a fourth handle."""
+    """frep-plate3 cut 13:1 (bench/sweep.py, full mode): the cut hole's two loops face each other at
+    19 vertex pairs, and the input joins them at four pinches. The pinches' joins are the handle
+    there: genus 3, the truth. Joined for facing each other as well, they made a fourth handle.
+    (frep-plate3+cross 2:0 in light mode, 14 pairs and two pinches, was the other case.)"""
     from bench.sweep import cut_named
 
-    case = cut_named("frep-plate3+cross:2:0")
+    case = cut_named("frep-plate3:13:1")
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
-    res = repair(model, RepairParams())
+    params = RepairParams(field=FieldParams(mode="full"))
+    res = repair(model, params)
     t = topology(res.mesh.faces)
     assert t.watertight and t.components == 1 and t.genus == 3
     assert_input_kept(model, res.mesh)
     monkeypatch.setattr(rp, "_pinched", lambda pair, group: False)
-    assert topology(repair(model, RepairParams()).mesh.faces).genus == 4
+    assert topology(repair(model, params).mesh.faces).genus == 4
