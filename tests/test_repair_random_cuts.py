@@ -975,3 +975,20 @@ def test_lines_between_loops_a_fragment_joins_set_no_bar_for_a_handle(monkeypatc
     closed_repair(model, genus=1)
     monkeypatch.setattr(rp, "JOINED_NO_BAR", False)
     assert topology(repair(model, RepairParams()).mesh.faces).genus == 0
+
+
+def test_a_tunnel_of_one_crossing_line_and_shortcuts_is_none(monkeypatch):
+    """bench/sweep.py cut featuretype:25:1 (held-out seed), light mode: of the four lines between
+    loops 2 and 4, three cut across the part (the input's edges join their ends by paths 1.01-1.05
+    times their length) and one crosses missing surface: no tunnel (repair_field.ACROSS_TWO), and
+    the part comes back with its 9 handles (loops 0 and 5, facing each other at 16 vertex pairs,
+    make the one the cut took). With the pair's one crossing line enough, as before: genus 11."""
+    import algorithms.repair_field as rf
+    from bench.sweep import make_cut
+
+    case = make_cut("featuretype", 25, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=9)
+    assert "loops 2 and 4: 4 lines join them, all along the surface between them: no tunnel" in res.tunnel_note
+    monkeypatch.setattr(rf, "ACROSS_TWO", False)
+    assert topology(repair(model, RepairParams()).mesh.faces).genus == 11
