@@ -350,7 +350,8 @@ def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int], mesh: Me
     if short is None or any(id(ln) not in short for ln in chosen):
         short = dict(zip(map(id, chosen), surface_shortcuts(chosen, mesh)))
     if on is None or any(id(ln) not in on for ln in chosen):
-        on = dict(zip(map(id, chosen), runs_on_surface(chosen, mesh) | np.array([short[id(ln)] for ln in chosen])))
+        on = dict(zip(map(id, chosen), runs_on_surface(chosen, mesh)
+                      | np.array([short[id(ln)] for ln in chosen], dtype=bool)))
     keep: list[ForceLine] = []
     flat: list[tuple[int, int]] = []
     for pair, lines in by_pair.items():
