@@ -819,6 +819,9 @@ def test_lines_whose_ends_the_surface_joins_within_two_and_a_half_lengths_make_n
     assert "loops 1 and 5: 3 lines join them, all along the surface between them: no tunnel" in res.tunnel_note
     assert not any(b.kind == "tunnel" for b in res.bridges)
     monkeypatch.setattr(rf, "SHORTCUT", 2.0)
+    # one line across and two shortcuts: no tunnel either way since repair_field.ACROSS_TWO
+    assert "loops 1 and 5: 3 lines join them, all along the surface" in repair(model, RepairParams()).tunnel_note
+    monkeypatch.setattr(rf, "ACROSS_TWO", False)
     res = repair(model, RepairParams())
     assert "loops 1 and 5: 3 lines join them, a tunnel" in res.tunnel_note
     assert topology(res.mesh.faces).genus == 2
