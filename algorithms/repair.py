@@ -17,7 +17,7 @@ and ``cancel`` checked between steps.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
@@ -1570,18 +1570,18 @@ def _off_boundary(boundary: BoundaryEdges | None, V: NDArray[np.float64], along:
 
 def _closest_bridges(V: NDArray[np.float64], pairs: tuple[tuple[int, int], ...], kept: list[Bridge],
                      loop_of: dict[int, tuple[int, int]], fa, fb, lc: float, ki: float,
-                     spacing: float) -> list[Bridge]:
+                     spacing: float) -> Iterator[Bridge]:
     """Straight bridges between the mutually closest vertex pairs ``pairs`` (a on loop ``fa``, b on
     loop ``fb``: repair_field.mutual_closest), in the order they should be tried to make a tunnel's
     two: each next the farthest, along the first loop, from the ends taken there so far (those of
     ``kept`` and of the ones before it; with none taken, the shortest pair first). For a run of
     pairs along two walls facing each other: the two ends of the run, so that the strip between the
     walls is as wide as it can be. Each with the straight-bridge quality of spec (9)
-    (:func:`_best_straight_bridge` on the one pair)."""
+    (:func:`_best_straight_bridge` on the one pair). Made one at a time, as the caller takes them
+    (it stops at a tunnel's two)."""
     first, size = loop_of[pairs[0][0]][0], len(fa.vertices)
     taken = [loop_of[v][1] for b in kept for v in (b.start, b.end) if loop_of[v][0] == first]
     left = list(pairs)
-    out: list[Bridge] = []
     while left:
         if taken:
             at = np.array([loop_of[a][1] for a, _ in left])[:, None] - np.array(taken)[None, :]
@@ -1593,8 +1593,7 @@ def _closest_bridges(V: NDArray[np.float64], pairs: tuple[tuple[int, int], ...],
         taken.append(i)
         _, _, q = _best_straight_bridge(V[a][None], fa.tangent[i][None], fa.normal[i][None], V[b][None],
                                         fb.tangent[j][None], lc, ki)
-        out.append(Bridge(a, b, resample_chain(np.vstack([V[a], V[b]]), spacing), q, "tunnel"))
-    return out
+        yield Bridge(a, b, resample_chain(np.vstack([V[a], V[b]]), spacing), q, "tunnel")
 
 
 def _drop_repeats(polygon: tuple[int, ...]) -> tuple[int, ...]:
