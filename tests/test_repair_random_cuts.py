@@ -809,15 +809,21 @@ def test_lines_whose_ends_the_surface_joins_within_two_and_a_half_lengths_make_n
     three lines to the hole at the rod's end, 0.11-0.22 long, each beating the one line across its
     own hole, and the tunnel rule joined the two (genus 2, truth 0). The input's edges join the
     lines' ends within 1.68, 1.84 and 2.02 times their lengths: at SHORTCUT = 2 the last one kept the
-    pair from reading as joined by the surface."""
+    pair from reading as joined by the surface. One of the three lines passes over a rim on its way
+    (repair_field.over_a_rim) and joins neither loop since; the thresholds' counterfactuals run with
+    that test off."""
     import algorithms.repair_field as rf
     from bench.sweep import make_cut
 
     case = make_cut("frep-cross", 18, 0)
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
     res = closed_repair(model, genus=0)
-    assert "loops 1 and 5: 3 lines join them, all along the surface between them: no tunnel" in res.tunnel_note
+    assert "loops 1 and 5: 2 lines join them, all along the surface between them: no tunnel" in res.tunnel_note
+    assert "1 line(s) between two loops pass over a rim" in res.tunnel_note
     assert not any(b.kind == "tunnel" for b in res.bridges)
+    monkeypatch.setattr(rf, "OVER_RIMS", False)
+    res = closed_repair(model, genus=0)
+    assert "loops 1 and 5: 3 lines join them, all along the surface between them: no tunnel" in res.tunnel_note
     monkeypatch.setattr(rf, "SHORTCUT", 2.0)
     # one line across and two shortcuts: no tunnel either way since repair_field.ACROSS_TWO
     assert "loops 1 and 5: 3 lines join them, all along the surface" in repair(model, RepairParams()).tunnel_note
@@ -985,12 +991,19 @@ def test_a_tunnel_of_one_crossing_line_and_shortcuts_is_none(monkeypatch):
     loops 2 and 4, three cut across the part (the input's edges join their ends by paths 1.01-1.05
     times their length) and one crosses missing surface: no tunnel (repair_field.ACROSS_TWO), and
     the part comes back with its 9 handles (loops 0 and 5, facing each other at 16 vertex pairs,
-    make the one the cut took). With the pair's one crossing line enough, as before: genus 11."""
+    make the one the cut took). With the pair's one crossing line enough, as before: genus 11. That
+    crossing line and a shortcut pass over a rim on their way (repair_field.over_a_rim) and join
+    neither loop since, which leaves the pair no line across: the counterfactual runs with that test
+    off."""
     import algorithms.repair_field as rf
     from bench.sweep import make_cut
 
     case = make_cut("featuretype", 25, 1)
     model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=9)
+    assert "loops 2 and 4: 3 lines join them, all along the surface between them: no tunnel" in res.tunnel_note
+    assert "2 line(s) between two loops pass over a rim" in res.tunnel_note
+    monkeypatch.setattr(rf, "OVER_RIMS", False)
     res = closed_repair(model, genus=9)
     assert "loops 2 and 4: 4 lines join them, all along the surface between them: no tunnel" in res.tunnel_note
     monkeypatch.setattr(rf, "ACROSS_TWO", False)

@@ -52,6 +52,42 @@ def test_through_sheet_when_the_line_enters_the_solid_at_both_ends():
     assert not rf.through_sheet(_line([[0, 0, 0], [0, 0, -1]]), {0: up})
 
 
+def test_through_sheet_reads_the_chord_of_a_line_that_leaves_along_the_surface(monkeypatch):
+    """A line from the top side of a sheet 0.12 thick that leaves nearly along it (its point half
+    its length away 79 degrees off the inward normal) and then goes down to the bottom side: its
+    chord is 40 degrees off both normals (-n . d = 0.77): through (SHEET_CHORD); without the chord,
+    not. A chord 50 degrees off: not through."""
+    up, down = np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, -1.0])
+    a = np.radians(40)
+    x = 0.12 * np.tan(a)
+    late = _line([[0, 0, 0], [x, 0, -0.02], [x, 0, -0.12]])
+    assert rf.through_sheet(late, {0: up, 1: down})
+    monkeypatch.setattr(rf, "SHEET_CHORD", False)
+    assert not rf.through_sheet(late, {0: up, 1: down})
+    monkeypatch.setattr(rf, "SHEET_CHORD", True)
+    x = 0.12 * np.tan(np.radians(50))
+    assert not rf.through_sheet(_line([[0, 0, 0], [x, 0, -0.02], [x, 0, -0.12]]), {0: up, 1: down})
+
+
+def test_two_holes_one_above_the_other_on_a_thin_plate_are_capped(monkeypatch):
+    """bench/sweep.py thin-plate:30:1 (light): two ball cuts on the two faces of the plate (0.12
+    thick) at x 0.4-1.1, one above the other. Three lines left the lower hole almost along the plate,
+    rose through it and reached the upper hole: their chords 43 degrees off the normals, the point
+    half their length away 55-60. Read by the chord they run through a sheet: the holes are capped,
+    genus 0 (without the chord: a tunnel, genus 1)."""
+    from bench.sweep import cut_named
+
+    case = cut_named("thin-plate:30:1")
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    params = RepairParams(field=FieldParams(mode="light"))
+    res = repair(model, params)
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.components == 1 and t.genus == 0, res.tunnel_note
+    assert_input_kept(model, res.mesh)
+    monkeypatch.setattr(rf, "SHEET_CHORD", False)
+    assert topology(repair(model, params).mesh.faces).genus == 1
+
+
 @pytest.mark.parametrize("mode", ["light", "full"])
 def test_a_hole_punched_through_a_thin_sheet_is_capped_on_both_sides(mode, monkeypatch):
     truth = gen.plate((3.0, 2.0, 0.12))

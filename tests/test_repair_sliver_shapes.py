@@ -66,16 +66,27 @@ def test_capsule_in_three_islands_stays_on_the_capsule():
     assert off.max() < 0.01, off.max()  # was 0.45 (the strip on the tube's axis)
 
 
-def test_cylinder_cups_with_a_rim_hole_get_no_handle():
+def test_cylinder_cups_with_a_rim_hole_get_no_handle(monkeypatch):
+    import algorithms.repair_field as rf
+
     cyl = subdivided(trimesh.creation.cylinder(radius=0.6, height=1.5, sections=64))
     c = face_centroids(cyl)
     remove = (np.linalg.norm(c - [0.6, 0.0, 0.75], axis=1) < 0.3) | slab(cyl, [0, 0, 1], 0.0, 0.1)
     res, t, new = run(cyl, remove)
     assert t.watertight and t.components == 1 and t.genus == 0  # was genus 1
     assert any("a handle the tunnel rule does not support" in why for _, why in res.rejected)
-    # the rim hole's lines to the band cut across the cup's wall, which is there (surface_shortcuts):
-    # no tunnel (before that test, one bridge of it was left and refused: "left with one bridge")
-    assert "all along the surface between them: no tunnel" in res.tunnel_note
+    # the rim hole's two lines to the band run down through the cup's solid: read by their chords,
+    # they enter it at both ends (repair_field.through_sheet, SHEET_CHORD) and join neither loop
+    assert "2 line(s) between two loops run through a sheet" in res.tunnel_note
+    # read without the chords, they cross the rim hole, pass over its rim and go on (over_a_rim); and
+    # without that, they cut across the cup's wall, which is there (surface_shortcuts): no tunnel
+    # either way (before that test, one bridge of it was left and refused: "left with one bridge")
+    monkeypatch.setattr(rf, "SHEET_CHORD", False)
+    assert "2 line(s) between two loops pass over a rim" in run(cyl, remove)[0].tunnel_note
+    monkeypatch.setattr(rf, "OVER_RIMS", False)
+    assert "all along the surface between them: no tunnel" in run(cyl, remove)[0].tunnel_note
+    monkeypatch.setattr(rf, "SHEET_CHORD", True)
+    monkeypatch.setattr(rf, "OVER_RIMS", True)
     # distance to the closed cylinder |x_xy| <= 0.6, |z| <= 0.75
     r = np.linalg.norm(new[:, :2], axis=1)
     outside = np.hypot(np.maximum(r - 0.6, 0), np.maximum(np.abs(new[:, 2]) - 0.75, 0))
