@@ -155,10 +155,10 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     # seeds 1-2 it changed nothing else.
     # (forced tunnels, "on", take the best connected pair as before: no line is set aside there)
     between = [ln for k, got in from_loop.items() for to, ln in got if to not in (k, -1)]
-    # each line measured once, read by both calls below: on the surface or a shortcut, and a shortcut
-    short = dict(zip(map(id, between), surface_shortcuts(between, model.mesh))) if between and not force else {}
-    on = ({k: bool(x) or short[k] for k, x in zip(map(id, between), runs_on_surface(between, model.mesh))}
-          if between and not force else {})
+    # each line measured once, read by both calls below: whether it runs on the surface, whether it is a shortcut
+    measured = bool(between) and not force
+    on = dict(zip(map(id, between), runs_on_surface(between, model.mesh))) if measured else {}
+    short = dict(zip(map(id, between), surface_shortcuts(between, model.mesh))) if measured else {}
     along: list[tuple[int, int]] = []
     if not ALONG_COMPETES and not force:
         _, along = _off_surface_pairs(between, pos_in, model.mesh, on=on, short=short)
@@ -326,8 +326,8 @@ def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int], mesh: Me
     """The chosen tunnel lines without those of pairs of loops whose every line runs on the input
     surface (:func:`runs_on_surface`) or cuts across it (:func:`surface_shortcuts`: the input's edges
     join its ends within SHORTCUT times its length). Returns (lines kept, the pairs (a, b), a < b,
-    left out). ``on``: those flags by ``id`` of each line, and ``short``: whether it is a shortcut,
-    measured already (else measured here).
+    left out). ``on`` (runs on the surface) and ``short`` (a shortcut): those flags by ``id`` of each
+    line, measured already (else measured here); a line is along the surface if either holds.
 
     **(choice)**, beyond the spec, for the tunnel rule. A tunnel is surface that is missing between
     two loops: its lines cross the gap where that surface was. Lines that all run along surface that
@@ -359,12 +359,11 @@ def _off_surface_pairs(chosen: list[ForceLine], pos_in: dict[int, int], mesh: Me
     if short is None or any(id(ln) not in short for ln in chosen):
         short = dict(zip(map(id, chosen), surface_shortcuts(chosen, mesh)))
     if on is None or any(id(ln) not in on for ln in chosen):
-        on = dict(zip(map(id, chosen), runs_on_surface(chosen, mesh)
-                      | np.array([short[id(ln)] for ln in chosen], dtype=bool)))
+        on = dict(zip(map(id, chosen), runs_on_surface(chosen, mesh)))
     keep: list[ForceLine] = []
     flat: list[tuple[int, int]] = []
     for pair, lines in by_pair.items():
-        across = sum(not on[id(ln)] for ln in lines)  # lines across missing surface
+        across = sum(not (on[id(ln)] or short[id(ln)]) for ln in lines)  # lines across missing surface
         if across == 0 or ACROSS_TWO and across < 2 and any(short[id(ln)] for ln in lines):
             flat.append(pair)
         else:

@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_repair_random_cuts import closed_repair, sweep_model
 
 import algorithms.repair_field as rf
 from algorithms.metrics import topology
-from algorithms.normalize import normalize
 from algorithms.params import FieldParams
 from algorithms.records import ARRIVED, ForceLine
 from algorithms.repair import RepairParams, repair
@@ -31,8 +31,9 @@ def line(points) -> ForceLine:
 
 def test_a_line_across_two_holes_side_by_side_passes_over_the_strip_between_them():
     """Two unit holes 0.05 apart. A line from the left side of the first (x = 0) across it, over
-    the strip (x 1-1.05) and across the second to its right side (x = 2): 0.025 of its length (2)
-    from both rims at the strip, after 0.5 from the first: over a rim, read from either end. A line
+    the strip (x 1-1.05) and across the second to its right side (x = 2.05): 0.025 from both rims
+    at the strip (1.2 % of its length 2.05, within RIM_NEAR), after 0.5 from the first (more than
+    RIM_AWAY times the floor, 2 % of the length): over a rim, read from either end. A line
     from the first hole's near side straight to the second's (across the strip only) and a line
     across a tube's gap (two rims 0.3 apart, one above the other) move away from one loop and
     towards the other all along: no."""
@@ -59,24 +60,20 @@ def test_two_holes_one_face_apart_on_a_capsule_get_no_handle(monkeypatch):
     the small hole crossed it, passed over the strip and crossed the slab's band: a tunnel, a handle
     the capsule does not have (genus 1). Three of the four pass over a rim and join neither loop:
     the holes are capped, genus 0 (rule switched off: genus 1)."""
-    from bench.sweep import cut_named
-
-    case = cut_named("capsule:30:1")
-    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
-    params = RepairParams(field=FieldParams(mode="light"))
-    res = repair(model, params)
-    t = topology(res.mesh.faces)
-    assert t.watertight and t.components == 1 and t.genus == 0
+    model = sweep_model("capsule", 30, 1)
+    res = closed_repair(model, genus=0)
     assert "pass over a rim" in res.tunnel_note
     monkeypatch.setattr(rf, "OVER_RIMS", False)
-    assert topology(repair(model, params).mesh.faces).genus == 1
+    assert topology(repair(model, RepairParams(field=FieldParams(mode="light"))).mesh.faces).genus == 1
 
 
-@pytest.mark.parametrize("rim", [0.05, 0.2])
-def test_over_a_rim_reads_its_thresholds(rim):
-    """The same line passes 0.025 of its length from the rims: over a rim at RIM_NEAR 0.05 and 0.2
-    alike; at 0.01 it does not come near enough."""
+@pytest.mark.parametrize(("near", "away", "over"), [(0.01, 3.0, False), (0.0125, 3.0, True), (0.2, 3.0, True),
+                                                    (0.1, 11.0, True), (0.1, 12.0, False)])
+def test_over_a_rim_reads_its_thresholds(near, away, over):
+    """The line of the first test: 0.025 from the rims at the strip, 0.0122 of its length 2.05 (over
+    a rim from ``near`` 0.0125 up, not at 0.01); that distance counts as the floor, 2 % of the
+    length (0.041), and its distance to the first loop had risen to 0.49 at the sample nearest the
+    first hole's middle (11.9 times that: over a rim for ``away`` 11, not 12)."""
     a, b = square(0.0, 1.0), square(1.05, 2.05)
     across = line(np.c_[np.linspace(0.0, 2.05, 60), np.full(60, 0.5), np.zeros(60)])
-    assert rf.over_a_rim(across, a, b, near=rim)
-    assert not rf.over_a_rim(across, a, b, near=0.01)
+    assert rf.over_a_rim(across, a, b, near=near, away=away) is over

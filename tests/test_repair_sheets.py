@@ -75,17 +75,12 @@ def test_two_holes_one_above_the_other_on_a_thin_plate_are_capped(monkeypatch):
     rose through it and reached the upper hole: their chords 43 degrees off the normals, the point
     half their length away 55-60. Read by the chord they run through a sheet: the holes are capped,
     genus 0 (without the chord: a tunnel, genus 1)."""
-    from bench.sweep import cut_named
+    from test_repair_random_cuts import closed_repair, sweep_model
 
-    case = cut_named("thin-plate:30:1")
-    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
-    params = RepairParams(field=FieldParams(mode="light"))
-    res = repair(model, params)
-    t = topology(res.mesh.faces)
-    assert t.watertight and t.components == 1 and t.genus == 0, res.tunnel_note
-    assert_input_kept(model, res.mesh)
+    model = sweep_model("thin-plate", 30, 1)
+    closed_repair(model, genus=0)  # closed, one piece, every input face kept
     monkeypatch.setattr(rf, "SHEET_CHORD", False)
-    assert topology(repair(model, params).mesh.faces).genus == 1
+    assert topology(repair(model, RepairParams(field=FieldParams(mode="light"))).mesh.faces).genus == 1
 
 
 @pytest.mark.parametrize("mode", ["light", "full"])
