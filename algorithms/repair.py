@@ -490,6 +490,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         # fragment joins, median 0.16, beside the band of 20 lines, 0.067, that closes the handle).
         handle_pairs = {key for key, qs in by_pair.items()
                         if len(qs) >= 3 and med[key] >= 0.5 * max(best[key[0]], best[key[1]])}
+        sheet_pairs = _sheet_pairs(cands, loop_of, frames) if SHEET_HANDLES else set()
         # where each loop's lines reach other loops: (position, other loop), for _second_band
         contacts: dict[int, list[tuple[int, int]]] = {}
         for b, _ in cands:
@@ -525,6 +526,8 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
             if why is None and guard.effect(b.start, b.end) == "handle":
                 if pair not in handle_pairs:
                     why = "would join two holes of one surface (a handle the tunnel rule does not support)"
+                elif pair in sheet_pairs:
+                    why = SHEET_HANDLE
                 elif RIM_ENDS_TAKEN and tube_ends.intersection(pair):
                     why = ("would join a rim already joined along its tube to another loop of the same surface "
                            "(a handle beside the tube's)")
@@ -1416,6 +1419,36 @@ def _past_a_pinch(pair: tuple[int, int], group: dict[int, int]) -> bool:
     joined at 5 pinches and by 8 lines): kept."""
     a, b = pair
     return (a in group or b in group) and group.get(a, -1 - a) != group.get(b, -1 - b)
+
+
+SHEET_HANDLES = True  # step 1: no handle between loops whose lines run through a sheet (a switch for measuring)
+SHEET_HANDLE = "would join two holes of one surface through a sheet (most lines between them enter both its sides)"
+
+
+def _sheet_pairs(cands: list[tuple[Bridge, ForceLine]], loop_of: dict[int, tuple[int, int]], frames: list
+                 ) -> set[tuple[int, int]]:
+    """Pairs of loops most of whose step-1 lines (at least half) run through a sheet
+    (``repair_field.through_sheet``: entering the solid along the inward normal at both ends).
+
+    **(choice)**, beyond the spec, as the tunnel rule's sheet test (step 2) for the handles step 1
+    closes between islands (``handle_pairs``: a torus cut into pieces). Two holes one above the
+    other on the two faces of a thin wall are a sheet's thickness apart, and their lines beat every
+    other line of theirs; as the first join of their islands they are the bridges there are, but
+    where the islands are joined already (each to a third) they make a handle the wall does not
+    have. frep-bowl cut 35:0 (bench/sweep.py, both modes): slabs parted the bowl's outer and inner
+    faces into bands, joined by bands of bridges, and a ball took the bottom through the wall; all
+    17 lines between the two bottom holes ran through the wall (none of the bands' 192): a ring of
+    them closed a handle (genus 1, truth 0)."""
+    from .repair_field import through_sheet
+
+    normal_at = {int(v): f.normal[i] for f in frames for i, v in enumerate(f.vertices)}
+    count: dict[tuple[int, int], list[int]] = {}
+    for b, ln in cands:
+        pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
+        c = count.setdefault(pair, [0, 0])  # type: ignore[arg-type]
+        c[0] += 1
+        c[1] += bool(through_sheet(ln, normal_at))
+    return {pair for pair, (n, through) in count.items() if pair[0] != pair[1] and 2 * through >= n}
 
 
 SLANTED_ISLAND_RIMS = True  # step 1's facing rims of two islands by the slanted test too (a switch for measuring)
