@@ -155,3 +155,16 @@ def test_collapse_bad_removes_a_cap_of_no_area():
     t = p[f]
     n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     assert (n[:, 2] > 0).all()  # nothing folded
+
+
+def test_collapse_bad_leaves_a_pillow_vertex_alone():
+    """A free vertex c whose star is two faces over the same three vertices (a pillow, left by the
+    fill of a tiny hole): collapsing c onto either neighbour would remove its whole star, with no
+    face left to judge. featuretype:42:0 of bench/sweep.py (full mode) raised a ValueError there
+    (the smallest angle of no faces); now such a vertex is not collapsed (it may be moved)."""
+    p = np.array([[0.0, 0, 0], [1, 0, 0], [0.5, 0.02, 0], [0.5, 1, 0]])
+    pillow = np.array([[2, 0, 1], [2, 1, 0]], dtype=np.int64)  # vertex 2, a sliver of 2 degrees
+    fixed = np.array([[0, 3, 1]], dtype=np.int64)
+    free = np.array([False, False, True, False])
+    f, _ = R._collapse_bad(p, pillow, fixed, None, free, np.arange(2))
+    assert np.array_equal(np.sort(f, axis=1), np.sort(pillow, axis=1))  # both faces there, vertex 2 kept

@@ -886,6 +886,8 @@ def _collapse_bad(p: NDArray[np.float64], f: NDArray[np.int64], fixed: NDArray[n
             nu -= {u}
             if nu & ring != opp:
                 continue  # the link condition
+            if both.all():
+                continue  # a star of two faces (a pillow: c has no edge to collapse along)
             nf = star[~both].copy()
             nf[nf == c] = u
             t2 = p[nf]
