@@ -1439,15 +1439,15 @@ def _sheet_pairs(cands: list[tuple[Bridge, ForceLine]], loop_of: dict[int, tuple
     faces into bands, joined by bands of bridges, and a ball took the bottom through the wall; all
     17 lines between the two bottom holes ran through the wall (none of the bands' 192): a ring of
     them closed a handle (genus 1, truth 0)."""
-    from .repair_field import through_sheet
+    from . import repair_field as rf
 
-    normal_at = {int(v): f.normal[i] for f in frames for i, v in enumerate(f.vertices)}
+    normal_at = rf.loop_normals(frames)
     count: dict[tuple[int, int], list[int]] = {}
     for b, ln in cands:
         pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
         c = count.setdefault(pair, [0, 0])  # type: ignore[arg-type]
         c[0] += 1
-        c[1] += bool(through_sheet(ln, normal_at))
+        c[1] += bool(rf.through_sheet(ln, normal_at))
     return {pair for pair, (n, through) in count.items() if pair[0] != pair[1] and 2 * through >= n}
 
 

@@ -80,7 +80,7 @@ def tunnel_lines(model: Icadm, frames: list[LoopFrame], loop_ids: list[int], par
     lc_inter = auto_lc(src)
     edge = _edges(tuple(sel))
     pos_in = {int(v): k for k in loop_ids for v in frames[k].vertices}
-    normal_at = {int(v): frames[k].normal[i] for k in loop_ids for i, v in enumerate(frames[k].vertices)}
+    normal_at = loop_normals(frames, loop_ids)
     sheet = 0  # arrived lines between two loops through a sheet (through_sheet): they join neither
     rimmed = 0  # arrived lines between two loops that pass over a rim on their way (over_a_rim): the same
     bvh = mesh_bvh(model.mesh) if params.shielding and model.mesh.n_faces else None
@@ -413,6 +413,13 @@ def surface_shortcuts(lines: list[ForceLine], mesh: Mesh, *, factor: float | Non
 
 SHEET = 0.7  # through_sheet: -n . d above this at both ends (within about 45 degrees of the inward normal)
 SHEET_CHORD = True  # through_sheet: the chord between the ends tested too (a switch for measuring)
+
+
+def loop_normals(frames: list[LoopFrame], loop_ids: list[int] | None = None) -> dict[int, NDArray[np.float64]]:
+    """Vertex -> outward surface normal of its loop frame, over the loops ``loop_ids`` (default: all):
+    what :func:`through_sheet` reads at a line's ends."""
+    ks = range(len(frames)) if loop_ids is None else loop_ids
+    return {int(v): frames[k].normal[i] for k in ks for i, v in enumerate(frames[k].vertices)}
 
 
 def through_sheet(line: ForceLine, normal_at: dict[int, NDArray[np.float64]], *, limit: float = SHEET) -> bool:
