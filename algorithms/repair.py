@@ -416,8 +416,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
     joined: dict[tuple[int, int], list[tuple[int, int]]] = {}
 
     def mark_joined(b: Bridge) -> None:
-        joined.setdefault(tuple(sorted((loop_of[b.start][0], loop_of[b.end][0]))),  # type: ignore[arg-type]
-                          []).append(_ends(b, loop_of))
+        joined.setdefault(_loop_pair(b, loop_of), []).append(_ends(b, loop_of))
 
     # 0. fragments hanging at vertices of two loops or more (a triangle left across the gap between
     #    islands by a cut: attach_fragments walks it in after step 1, where it joins the walks it touches
@@ -468,15 +467,15 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         cands = as_bridges(list(found.lines), "island")
         support: dict[tuple[int, int], int] = {}
         for b, _ in cands:
-            key = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
-            support[key] = support.get(key, 0) + 1  # type: ignore[index]
+            key = _loop_pair(b, loop_of)
+            support[key] = support.get(key, 0) + 1
         # island lines may also close a handle (a torus cut into pieces), but only between two
         # loops that many good lines join: at least three, with a median quality at least half
         # the best pair's of each loop. A stray line into an unrelated hole fails that.
         by_pair: dict[tuple[int, int], list[float]] = {}
         for b, _ in cands:
-            key = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
-            by_pair.setdefault(key, []).append(b.quality)  # type: ignore[arg-type]
+            key = _loop_pair(b, loop_of)
+            by_pair.setdefault(key, []).append(b.quality)
         med = {key: float(np.median(qs)) for key, qs in by_pair.items()}
         best: dict[int, float] = {}
         for key, m in med.items():
@@ -490,14 +489,16 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
         # fragment joins, median 0.16, beside the band of 20 lines, 0.067, that closes the handle).
         handle_pairs = {key for key, qs in by_pair.items()
                         if len(qs) >= 3 and med[key] >= 0.5 * max(best[key[0]], best[key[1]])}
-        sheet_pairs = _sheet_pairs(cands, loop_of, frames) if SHEET_HANDLES else set()
+        # (read only where a handle may be kept: the lines of handle pairs)
+        sheet_pairs = (_sheet_pairs([c for c in cands if _loop_pair(c[0], loop_of) in handle_pairs], loop_of, frames)
+                       if SHEET_HANDLES else set())
         # where each loop's lines reach other loops: (position, other loop), for _second_band
         contacts: dict[int, list[tuple[int, int]]] = {}
         for b, _ in cands:
             (ka, ia), (kb, ib) = loop_of[b.start], loop_of[b.end]
             contacts.setdefault(ka, []).append((ia, kb))
             contacts.setdefault(kb, []).append((ib, ka))
-        cands.sort(key=lambda c: (-support[tuple(sorted((loop_of[c[0].start][0], loop_of[c[0].end][0])))],
+        cands.sort(key=lambda c: (-support[_loop_pair(c[0], loop_of)],
                                   -c[0].quality))
         # the facing rims of a tube cut across into two islands, across a gap longer than the tube
         # is wide: bridges along the tube, as between the rims of one island (step 2, _rim_bridges)
@@ -514,7 +515,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
                          f"{'joined along it' if along_it else 'no bridge along it fits'}")
         for b, ln in cands:
             n_arrived += 1
-            pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
+            pair = _loop_pair(b, loop_of)
             if pair in island_rims:
                 rejected.append((b.candidate, "between facing rims across a long gap: bridges along the tube"))
                 continue
@@ -621,7 +622,7 @@ def _repair(model: Icadm, params: RepairParams, *, progress: Progress | None = N
             for b, ln in as_bridges(list(tl.lines), "tunnel"):
                 n_arrived += 1
                 near = min(wide, *[radius.get(loop_of[v][0], wide) for v in (b.start, b.end)])
-                pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
+                pair = _loop_pair(b, loop_of)
                 if _past_a_pinch(pair, pinch_group):
                     rejected.append((b.candidate, PAST_A_PINCH))
                     continue
@@ -1358,11 +1359,21 @@ def _at_the_pairs_pinch(b: Bridge, loop_of: dict[int, tuple[int, int]], copies: 
     its first run now leaves no copy apart, where the third run's pinch joins did the tunnel's work."""
     if origin[b.start] == origin[b.end]:
         return False
-    for v, other in ((b.start, b.end), (b.end, b.start)):
-        k = loop_of[other][0]
-        if any(w != v and w in loop_of and loop_of[w][0] == k for w in copies.get(int(origin[v]), ())):
-            return True
-    return False
+    return any(_twin_on(v, loop_of[other][0], loop_of, copies, origin)
+               for v, other in ((b.start, b.end), (b.end, b.start)))
+
+
+def _loop_pair(b: Bridge, loop_of: dict[int, tuple[int, int]]) -> tuple[int, int]:
+    """The loops of bridge ``b``'s two ends, smaller first (a key of the maps by pair of loops)."""
+    a, c = loop_of[b.start][0], loop_of[b.end][0]
+    return (a, c) if a <= c else (c, a)
+
+
+def _twin_on(v: int, k: int, loop_of: dict[int, tuple[int, int]], copies: dict[int, list[int]],
+             origin: NDArray[np.int64]) -> bool:
+    """Whether another copy of vertex ``v``'s input vertex (normalisation split it at a pinch) lies on
+    loop ``k``."""
+    return any(w != v and w in loop_of and loop_of[w][0] == k for w in copies.get(int(origin[v]), ()))
 
 
 AT_OWN_PINCH = True  # a switch for measuring (_at_a_loops_pinch)
@@ -1386,8 +1397,7 @@ def _at_a_loops_pinch(b: Bridge, loop_of: dict[int, tuple[int, int]], copies: di
     copy on loop 6 to loop 0) for its handle."""
     if loop_of[b.start][0] == loop_of[b.end][0]:
         return False
-    k = loop_of[b.end][0]
-    return any(w != b.end and w in loop_of and loop_of[w][0] == k for w in copies.get(int(origin[b.end]), ()))
+    return _twin_on(b.end, loop_of[b.end][0], loop_of, copies, origin)
 
 
 PINCHED_CLOSE = "between loops the input joins at a pinch, joined for facing each other: they meet at the pinch"
@@ -1444,8 +1454,8 @@ def _sheet_pairs(cands: list[tuple[Bridge, ForceLine]], loop_of: dict[int, tuple
     normal_at = rf.loop_normals(frames)
     count: dict[tuple[int, int], list[int]] = {}
     for b, ln in cands:
-        pair = tuple(sorted((loop_of[b.start][0], loop_of[b.end][0])))
-        c = count.setdefault(pair, [0, 0])  # type: ignore[arg-type]
+        pair = _loop_pair(b, loop_of)
+        c = count.setdefault(pair, [0, 0])
         c[0] += 1
         c[1] += bool(rf.through_sheet(ln, normal_at))
     return {pair for pair, (n, through) in count.items() if pair[0] != pair[1] and 2 * through >= n}
