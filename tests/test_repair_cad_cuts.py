@@ -9,6 +9,7 @@ non-trivial boundaries), or the part comes back with genus 7 instead of 9."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from conftest import data_file
 from test_repair import assert_input_kept
 
@@ -233,3 +234,29 @@ def test_a_crease_is_continued_once_across_scattered_small_holes():
         pairs = [frozenset((b.start, b.end)) for b in res.bridges if b.kind == "crease"]
         assert len(pairs) == len(set(pairs))
         assert_input_kept(model, res.mesh)
+
+
+@pytest.mark.parametrize(("name", "mode", "one_sided"), [("featuretype:41:0", "light", True),
+                                                         ("featuretype:41:0", "full", True),
+                                                         ("featuretype:35:1", "light", True),
+                                                         ("featuretype:35:1", "full", False)])
+def test_a_through_holes_rim_and_its_lower_wall_keep_the_handle(name, mode, one_sided, monkeypatch):
+    """bench/sweep.py cuts 41:0 and 35:1: a ball took a through-hole's wall below its top rim, so the
+    rim is one loop and the wall's lower part, down to the bottom mouth, another. Every line from
+    the rim goes down to the lower loop; the lower loop's one line up loses to its short lines
+    across the mouth between the feet of the wall's slivers. The rule read lines both ways, one
+    side beaten, as no tunnel, and both ends were capped (genus 8). One loop's lines all winning,
+    two or more, with a line back, now make the tunnel (repair_field.ONE_SIDED). (35:1 in full mode
+    was right before: there lines both ways win.)"""
+    from bench.sweep import cut_named
+
+    case = cut_named(name)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = repair(model, RepairParams(field=FieldParams(mode=mode)))
+    t = topology(res.mesh.faces)
+    assert t.watertight and t.oriented and t.components == 1 and t.genus == 9
+    assert ("a tunnel (one loop's lines to the other all win)" in res.tunnel_note) == one_sided
+    assert_input_kept(model, res.mesh, fragments=True)
+    if one_sided:
+        monkeypatch.setattr(rf, "ONE_SIDED", False)
+        assert topology(repair(model, RepairParams(field=FieldParams(mode=mode))).mesh.faces).genus == 8

@@ -78,7 +78,10 @@ def test_loops_pinched_together_are_not_joined_for_facing_each_other(monkeypatch
     there: genus 3, the truth. Joined for facing each other as well, they made a fourth handle.
     (frep-plate3+cross 2:0 in light mode, 14 pairs and two pinches, was the other case.) The lines
     between the two loops pass over a rim on their way since (repair_field.over_a_rim) and the
-    pair is no longer joined without the guard either: the counterfactual runs with that test off."""
+    pair is no longer joined without the guard either: the counterfactual runs with that test off,
+    and with one-sided tunnels off: without the rim test the pair's lines make a one-sided tunnel
+    (repair_field.ONE_SIDED: one loop's lines all win), which takes the place of joining the pair
+    for facing each other, the join this test is about (genus 3 with it on)."""
     from bench.sweep import cut_named
 
     case = cut_named("frep-plate3:13:1")
@@ -91,4 +94,6 @@ def test_loops_pinched_together_are_not_joined_for_facing_each_other(monkeypatch
     monkeypatch.setattr(rp, "_pinched", lambda pair, group: False)
     assert topology(repair(model, params).mesh.faces).genus == 3
     monkeypatch.setattr(rf, "OVER_RIMS", False)
+    assert topology(repair(model, params).mesh.faces).genus == 3
+    monkeypatch.setattr(rf, "ONE_SIDED", False)
     assert topology(repair(model, params).mesh.faces).genus == 4

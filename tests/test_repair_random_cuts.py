@@ -903,6 +903,10 @@ def test_a_tunnel_beaten_only_by_lines_along_the_surface_is_kept_untwisted(monke
     # the two loops are each other's nearest at 17 vertex pairs: joined for facing each other too
     # (repair_field.mutual_closest), which alone would bring the tunnel back
     monkeypatch.setattr(rf, "MUTUAL_TUNNELS", False)
+    # so would the one-sided rule (repair_field.ONE_SIDED: loop 2's lines all reach loop 1 and win)
+    res = repair(model, RepairParams())
+    assert topology(res.mesh.faces).genus == 3 and "the other all win" in res.tunnel_note
+    monkeypatch.setattr(rf, "ONE_SIDED", False)
     res = repair(model, RepairParams())
     assert topology(res.mesh.faces).genus == 2 and "loops 1 and 2: 9 lines join them, beaten" in res.tunnel_note
 
@@ -1008,3 +1012,21 @@ def test_a_tunnel_of_one_crossing_line_and_shortcuts_is_none(monkeypatch):
     assert "loops 2 and 4: 4 lines join them, all along the surface between them: no tunnel" in res.tunnel_note
     monkeypatch.setattr(rf, "ACROSS_TWO", False)
     assert topology(repair(model, RepairParams()).mesh.faces).genus == 11
+
+
+def test_holes_on_two_strands_of_a_knot_that_open_apart_make_no_handle(monkeypatch):
+    """bench/sweep.py cut trefoil:40:1, full mode: the knotted tube in four islands, joined in a ring
+    by step 1 (its one handle). A hole on one strand sends three lines (0.20-0.24), all it has, to a
+    hole on the strand that passes it; that hole's one line back (0.55) loses to one across its own
+    hole (1.13). One loop's winners alone make a tunnel only between loops that open towards each
+    other (repair_field.opening_pairs); these open away (mean b . u -0.33 and -0.13). Without that
+    test the knot came back with a second handle (genus 2, 4.7 % of the diagonal off)."""
+    import algorithms.repair_field as rf
+    from bench.sweep import make_cut
+
+    case = make_cut("trefoil", 40, 1)
+    model = normalize(case.vertices, case.faces, extra_points=case.free_points)
+    res = closed_repair(model, genus=1, mode="full")
+    assert "one loop's lines to the other all win" not in res.tunnel_note
+    monkeypatch.setattr(rf, "opening_pairs", lambda frames, ids: None)
+    assert topology(repair(model, RepairParams(field=FieldParams(mode="full"))).mesh.faces).genus == 2

@@ -113,7 +113,10 @@ def test_lines_through_a_sheet_between_two_loops_join_neither(monkeypatch):
     with the pinches' copies apart (the repair's first run): the second, with them joined by pinch
     bridges, refuses that tunnel too. The lines that cut across surface that is there
     (repair_field.surface_shortcuts) change the first run's tunnels (genus 8 as written, 16 copies
-    apart; the repair's result is 9 either way), so the counterfactual runs with that test off."""
+    apart; the repair's result is 9 either way), so the counterfactual runs with that test off.
+    Loop 4's lines to loop 3 all win, so the one-sided rule (repair_field.ONE_SIDED) proposes that
+    tunnel again; the pinch joins refuse it (repair.PAST_A_PINCH) and the result is 9. The sheet
+    rule is read with the one-sided rule off."""
     from algorithms.repair import _repair
     from bench.sweep import make_cut
 
@@ -122,6 +125,10 @@ def test_lines_through_a_sheet_between_two_loops_join_neither(monkeypatch):
     res = repair(model, RepairParams(field=FieldParams(mode="light")))
     t = topology(res.mesh.faces)
     assert t.watertight and t.components == 1 and t.genus == 9, res.tunnel_note
+    assert "loops 3 and 4: 9 lines join them, a tunnel (one loop's lines to the other all win)" in res.tunnel_note
+    monkeypatch.setattr(rf, "ONE_SIDED", False)
+    res = repair(model, RepairParams(field=FieldParams(mode="light")))
+    assert topology(res.mesh.faces).genus == 9
     assert "loops 3 and 4: 9 lines join them, beaten" in res.tunnel_note
     assert_input_kept(model, res.mesh)
     params = RepairParams(field=FieldParams(mode="light"))

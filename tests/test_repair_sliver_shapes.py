@@ -132,9 +132,44 @@ def test_tunnel_rule_per_start_loop():
              2: [(1, line(2.9)), (1, line(2.2)), (3, line(0.89))]}
     chosen, notes = tunnel_pairs(mixed, [1, 2, 3])
     assert sorted(ln.quality for ln in chosen) == pytest.approx([2.2, 2.9, 7.2, 8.0]) and "a tunnel" in notes[0]
-    # only loop 2's lines win; loop 1 has lines to loop 2, all beaten: no tunnel
+    # lines both ways; loop 2's lines to loop 1 all win, loop 1's one line to loop 2 loses to a line
+    # across its own hole (a through-hole's top rim and the lower part of its wall, featuretype
+    # 41:0): a tunnel of loop 2's lines (ONE_SIDED), the losing line left out
     half = {1: [(2, line(1.0)), (-1, line(5.0))], 2: [(1, line(2.9)), (1, line(2.2))]}
-    assert "beaten" in tunnel_pairs(half, [1, 2])[1][0]
+    chosen, notes = tunnel_pairs(half, [1, 2])
+    assert sorted(ln.quality for ln in chosen) == pytest.approx([2.2, 2.9])
+    assert notes == ["loops 1 and 2: 3 lines join them, a tunnel (one loop's lines to the other all win)"]
+    # not when one of loop 2's lines to loop 1 loses too, nor with a single winner
+    assert "beaten" in tunnel_pairs({**half, 2: [(1, line(2.9)), (1, line(2.2)), (-1, line(2.5))]}, [1, 2])[1][0]
+    assert "beaten" in tunnel_pairs({**half, 2: [(1, line(2.9))]}, [1, 2])[1][0]
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("algorithms.repair_field.ONE_SIDED", False)
+        assert "beaten" in tunnel_pairs(half, [1, 2])[1][0]
+    # ... nor when the two loops do not open towards each other (opening_pairs: trefoil 40:1, full)
+    assert "beaten" in tunnel_pairs(half, [1, 2], opening=set())[1][0]
+    assert tunnel_pairs(half, [1, 2], opening={(1, 2)})[1] == notes
+
+
+def tube(rows: int, n: int = 24) -> tuple[np.ndarray, np.ndarray]:
+    """An open tube of radius 1 along z, ``rows`` bands of ``n`` quads (two triangles each), z 0..rows."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    v = np.array([(np.cos(a), np.sin(a), z) for z in range(rows + 1) for a in t])
+    f = [(r * n + i, r * n + (i + 1) % n, (r + 1) * n + i) for r in range(rows) for i in range(n)]
+    f += [(r * n + (i + 1) % n, (r + 1) * n + (i + 1) % n, (r + 1) * n + i) for r in range(rows) for i in range(n)]
+    return v, np.array(f)
+
+
+def test_loops_open_towards_each_other_across_a_missing_band_not_at_a_tubes_two_ends():
+    from algorithms.boundary import summarize
+    from algorithms.repair_field import opening_pairs
+
+    v, f = tube(4)
+    ends = summarize(normalize(v, f)).loops  # the two mouths open away from each other (into the air)
+    assert len(ends) == 2 and opening_pairs(list(ends), [0, 1]) == set()
+    band = (v[f].mean(axis=1)[:, 2] > 1.0) & (v[f].mean(axis=1)[:, 2] < 3.0)  # the middle two bands gone
+    loops = list(summarize(normalize(v, f[~band])).loops)
+    mid = [k for k, fr in enumerate(loops) if 0.5 < fr.points[:, 2].mean() < 3.5]  # the cut's two rims
+    assert len(loops) == 4 and len(mid) == 2 and opening_pairs(loops, range(4)) == {tuple(mid)}
     # lines one way only, one of them below a line across the start loop's own hole (trimesh annulus
     # cut 4:1, light): no tunnel (the other loop's lines all cross its own hole)
     one_sided = {1: [(2, line(4.8)), (2, line(4.7)), (2, line(4.35)), (-1, line(4.376))], 2: [(-1, line(1.9))]}
