@@ -216,16 +216,20 @@ def test_a_wall_touching_the_floor_at_pinches_is_joined_there_not_by_a_tunnel(mo
     there (repair_field.surface_shortcuts), so the rule no longer proposes that tunnel; with the
     shortcut test off it does, and the pinch group refuses it (repair.PAST_A_PINCH). (Since one
     loop's winning lines may make a tunnel, repair_field.ONE_SIDED, the kept run joins the 8 copies
-    at the wall's foot by pinch bridges and the rest into one vertex each; 16 bridges before.)"""
+    at the wall's foot by pinch bridges and the rest into one vertex each; with that rule off, 16
+    pinch bridges as before.)"""
     import algorithms.repair_field as rf
     from algorithms.repair import PAST_A_PINCH
 
-    for shortcut in (rf.SHORTCUT, 0.0):
-        monkeypatch.setattr(rf, "SHORTCUT", shortcut)
-        res = sweep_repair("featuretype:3:1")
-        assert_closed_once_merged(res, genus=9)
-        assert res.copies_left == 0 and sum(b.kind == "pinch" for b in res.bridges) >= 8
-    assert any(why == PAST_A_PINCH for _, why in res.rejected)
+    default = rf.SHORTCUT
+    for one_sided, pinches in ((True, 8), (False, 16)):
+        monkeypatch.setattr(rf, "ONE_SIDED", one_sided)
+        for shortcut in (default, 0.0):
+            monkeypatch.setattr(rf, "SHORTCUT", shortcut)
+            res = sweep_repair("featuretype:3:1")
+            assert_closed_once_merged(res, genus=9)
+            assert res.copies_left == 0 and sum(b.kind == "pinch" for b in res.bridges) >= pinches
+        assert any(why == PAST_A_PINCH for _, why in res.rejected)
 
 
 @pytest.mark.parametrize("mode", ["light", "full"])
